@@ -1,0 +1,70 @@
+#pragma once
+// The survey bundle (design.md, "Survey bundle"): a folder with survey.json, nav.csv,
+// pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
+// only when there is no error; every problem names its file, line and field.
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+#include "core/io/byte_source.h"
+#include "core/io/problem.h"
+#include "core/types/survey.h"
+
+namespace bathyslam {
+
+inline constexpr std::string_view kSurveyJsonFile = "survey.json";
+inline constexpr std::string_view kNavFile = "nav.csv";
+inline constexpr std::string_view kPingsFile = "pings.csv";
+inline constexpr std::string_view kReferenceNavFile = "reference_nav.csv";
+
+inline constexpr std::string_view kNavHeader = "time,easting,northing,depth,roll,pitch,heading";
+inline constexpr std::string_view kPingsHeader = "time,beam,along,across,down";
+
+// --- parsers of single files (`file` names the file in problems) -------------------------------
+
+SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
+                                 ProblemList& problems);
+
+std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
+                                     ProblemList& problems);
+
+struct TimeSpan {
+  double begin = 0;
+  double end = 0;
+};
+
+// Appends the pings and beams of `source` to `pings`/`beams`. With `nav_span`, pings outside it
+// are reported as one warning (the sync stage drops them).
+void parse_pings_csv(ByteSource& source, std::string_view file,
+                     const std::optional<TimeSpan>& nav_span, ProblemList& problems,
+                     std::vector<Ping>& pings, std::vector<Beam>& beams);
+
+// --- the whole bundle ---------------------------------------------------------------------------
+
+struct BundleReadResult {
+  std::optional<Survey> survey;  // set only when there is no error
+  std::vector<Problem> problems;  // errors and warnings, in file order
+};
+
+BundleReadResult read_bundle(const std::filesystem::path& dir);
+
+class BundleError : public std::runtime_error {
+ public:
+  explicit BundleError(std::vector<Problem> problems);
+  const std::vector<Problem>& problems() const { return problems_; }
+
+ private:
+  std::vector<Problem> problems_;
+};
+
+// read_bundle for callers that want the survey or an exception listing every error.
+Survey load_bundle(const std::filesystem::path& dir);
+
+// Writes `survey` as a bundle into `dir` (created if needed). Each file is written under a
+// temporary name and renamed, so a reader never sees half a file. Numbers are written in their
+// shortest exact form: reading the bundle back gives the same values.
+void write_bundle(const Survey& survey, const std::filesystem::path& dir);
+
+}  // namespace bathyslam

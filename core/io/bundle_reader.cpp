@@ -1,0 +1,299 @@
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "core/io/bundle.h"
+#include "core/io/crs.h"
+#include "core/io/csv.h"
+
+namespace bathyslam {
+namespace {
+
+std::string quoted(std::string_view text) {
+  constexpr std::size_t kMax = 80;
+  if (text.size() > kMax) return "'" + std::string(text.substr(0, kMax)) + "...'";
+  return "'" + std::string(text) + "'";
+}
+
+// Line (1-based) of the first occurrence of "key" in a JSON text, so a problem with a field of
+// survey.json can point at it; 1 when the key does not appear.
+std::size_t line_of_key(std::string_view text, std::string_view key) {
+  const std::string needle = "\"" + std::string(key) + "\"";
+  const std::size_t at = text.find(needle);
+  if (at == std::string_view::npos) return 1;
+  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + at, '\n'));
+}
+
+std::size_t line_of_byte(std::string_view text, std::size_t byte) {
+  byte = std::min(byte, text.size());
+  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + byte, '\n'));
+}
+
+// Checks the header line; false (with a problem) when it is missing or not exactly `expected`.
+bool check_header(LineReader& lines, std::string_view file, std::string_view expected,
+                  ProblemList& problems) {
+  std::string_view header;
+  if (!lines.next(header)) {
+    problems.error(std::string(file), 1, "", "empty file; expected the header '" +
+                                                 std::string(expected) + "'");
+    return false;
+  }
+  if (header.size() >= 3 && std::memcmp(header.data(), "\xEF\xBB\xBF", 3) == 0) {
+    header.remove_prefix(3);  // a byte-order mark left by spreadsheet tools
+  }
+  if (header != expected) {
+    problems.error(std::string(file), 1, "",
+                   "header is " + quoted(header) + "; expected exactly '" +
+                       std::string(expected) + "'");
+    return false;
+  }
+  return true;
+}
+
+// Parses fields[i] into `value`, reporting a problem naming the column when it fails.
+template <typename T>
+bool parse_field(std::string_view text, T& value, std::string_view file, std::size_t line,
+                 std::string_view column, ProblemList& problems) {
+  const NumberError error = parse_number(text, value);
+  if (error == NumberError::kNone) return true;
+  problems.error(std::string(file), line, std::string(column),
+                 std::string(describe(error)) + ": " + quoted(text));
+  return false;
+}
+
+bool check_field_count(std::size_t count, std::size_t expected, std::string_view file,
+                       std::size_t line, ProblemList& problems) {
+  if (count == expected) return true;
+  problems.error(std::string(file), line, "",
+                 std::to_string(count) + " fields; expected " + std::to_string(expected));
+  return false;
+}
+
+}  // namespace
+
+SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
+                                 ProblemList& problems) {
+  const std::string name(file);
+  SurveyMetadata metadata;
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    problems.error(name, line_of_byte(text, e.byte), "", std::string("not valid JSON: ") + e.what());
+    return metadata;
+  }
+  if (!doc.is_object()) {
+    problems.error(name, 1, "", "expected a JSON object");
+    return metadata;
+  }
+  auto string_field = [&](std::string_view key, std::string& out) {
+    const auto it = doc.find(key);
+    if (it == doc.end()) {
+      problems.error(name, 1, std::string(key), "missing");
+    } else if (!it->is_string() || it->get_ref<const std::string&>().empty()) {
+      problems.error(name, line_of_key(text, key), std::string(key),
+                     "must be a non-empty string");
+    } else {
+      out = it->get<std::string>();
+      return true;
+    }
+    return false;
+  };
+  auto object_field = [&](std::string_view key, nlohmann::json& out) {
+    const auto it = doc.find(key);
+    if (it == doc.end()) return;  // optional
+    if (!it->is_object()) {
+      problems.error(name, line_of_key(text, key), std::string(key), "must be a JSON object");
+      return;
+    }
+    out = *it;
+  };
+  string_field("name", metadata.name);
+  if (string_field("crs", metadata.crs)) {
+    if (auto why = crs_problem(metadata.crs)) {
+      problems.error(name, line_of_key(text, "crs"), "crs", *why);
+    }
+  }
+  object_field("sonar", metadata.sonar);
+  object_field("vehicle", metadata.vehicle);
+  return metadata;
+}
+
+std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
+                                     ProblemList& problems) {
+  static constexpr std::array<std::string_view, 7> kColumns = {
+      "time", "easting", "northing", "depth", "roll", "pitch", "heading"};
+  std::vector<NavSample> nav;
+  const std::size_t errors_before = problems.error_count();
+  LineReader lines(source);
+  if (!check_header(lines, file, kNavHeader, problems)) return nav;
+
+  std::array<std::string_view, 7> fields;
+  std::string_view line;
+  double previous_time = -std::numeric_limits<double>::infinity();
+  while (lines.next(line)) {
+    const std::size_t n = lines.line_number();
+    if (line.empty()) continue;
+    if (!check_field_count(split_fields(line, fields), fields.size(), file, n, problems)) continue;
+    NavSample s;
+    double* values[] = {&s.time,     &s.easting,   &s.northing,   &s.depth_m,
+                        &s.roll_deg, &s.pitch_deg, &s.heading_deg};
+    bool ok = true;
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+      ok &= parse_field(fields[i], *values[i], file, n, kColumns[i], problems);
+    }
+    if (!ok) continue;
+    if (s.time < previous_time) {
+      problems.error(std::string(file), n, "time",
+                     "goes backwards: " + std::string(fields[0]) + " after " +
+                         std::to_string(previous_time));
+    }
+    if (std::abs(s.roll_deg) > 90) problems.error(std::string(file), n, "roll", "outside ±90°");
+    if (std::abs(s.pitch_deg) > 90) problems.error(std::string(file), n, "pitch", "outside ±90°");
+    previous_time = std::max(previous_time, s.time);
+    nav.push_back(s);
+  }
+  if (nav.size() < 2 && problems.error_count() == errors_before) {
+    problems.error(std::string(file), 0, "", "needs at least 2 navigation samples, has " +
+                                                 std::to_string(nav.size()));
+  }
+  return nav;
+}
+
+void parse_pings_csv(ByteSource& source, std::string_view file,
+                     const std::optional<TimeSpan>& nav_span, ProblemList& problems,
+                     std::vector<Ping>& pings, std::vector<Beam>& beams) {
+  static constexpr std::array<std::string_view, 5> kColumns = {"time", "beam", "along", "across",
+                                                               "down"};
+  const std::size_t errors_before = problems.error_count();
+  LineReader lines(source);
+  if (!check_header(lines, file, kPingsHeader, problems)) return;
+
+  std::array<std::string_view, 5> fields;
+  std::string_view line;
+  // Rows of one ping repeat its time text; comparing text is cheaper than parsing it again.
+  std::string time_text;
+  double time = -std::numeric_limits<double>::infinity();
+  bool in_ping = false;
+  std::size_t outside_pings = 0, first_outside_line = 0;
+  const std::size_t first_new_ping = pings.size();
+
+  while (lines.next(line)) {
+    const std::size_t n = lines.line_number();
+    if (line.empty()) continue;
+    if (!check_field_count(split_fields(line, fields), fields.size(), file, n, problems)) continue;
+
+    if (!in_ping || fields[0] != time_text) {
+      double t = 0;
+      if (!parse_field(fields[0], t, file, n, kColumns[0], problems)) continue;
+      if (t < time) {
+        problems.error(std::string(file), n, "time",
+                       "goes backwards: " + std::string(fields[0]) + " after " + time_text);
+        continue;
+      }
+      time_text.assign(fields[0]);
+      if (!in_ping || t != time) {
+        time = t;
+        in_ping = true;
+        pings.push_back({t, static_cast<uint32_t>(beams.size()), 0});
+        if (nav_span && (t < nav_span->begin || t > nav_span->end) && outside_pings++ == 0) {
+          first_outside_line = n;
+        }
+      }
+    }
+
+    Beam beam;
+    bool ok = parse_field(fields[1], beam.index, file, n, kColumns[1], problems);
+    ok &= parse_field(fields[2], beam.along, file, n, kColumns[2], problems);
+    ok &= parse_field(fields[3], beam.across, file, n, kColumns[3], problems);
+    ok &= parse_field(fields[4], beam.down, file, n, kColumns[4], problems);
+    if (!ok) continue;
+    Ping& ping = pings.back();
+    if (ping.beam_count > 0 && beam.index <= beams.back().index) {
+      problems.error(std::string(file), n, "beam",
+                     "beam " + std::to_string(beam.index) + " follows beam " +
+                         std::to_string(beams.back().index) +
+                         " in the same ping; beams must increase within a ping");
+      continue;
+    }
+    if (beams.size() >= std::numeric_limits<uint32_t>::max()) {
+      problems.error(std::string(file), n, "", "more than 2^32 soundings");
+      return;
+    }
+    beams.push_back(beam);
+    ++ping.beam_count;
+  }
+  if (pings.size() == first_new_ping && problems.error_count() == errors_before) {
+    problems.error(std::string(file), 0, "", "no pings");
+  }
+  if (outside_pings > 0) {
+    problems.warning(std::string(file), first_outside_line, "time",
+                     std::to_string(outside_pings) +
+                         " pings lie outside the navigation's time span [" +
+                         std::to_string(nav_span->begin) + ", " + std::to_string(nav_span->end) +
+                         "] and will be dropped (first here)");
+  }
+}
+
+BundleReadResult read_bundle(const std::filesystem::path& dir) {
+  ProblemList problems;
+  Survey survey;
+  auto open = [&](std::string_view file, bool required) -> std::unique_ptr<FileSource> {
+    const auto path = dir / file;
+    if (!std::filesystem::exists(path)) {
+      if (required) problems.error(std::string(file), 0, "", "missing from " + dir.string());
+      return nullptr;
+    }
+    try {
+      return std::make_unique<FileSource>(path);
+    } catch (const std::exception& e) {
+      problems.error(std::string(file), 0, "", e.what());
+      return nullptr;
+    }
+  };
+
+  if (auto json = open(kSurveyJsonFile, true)) {
+    survey.metadata = parse_survey_json(read_all(*json), kSurveyJsonFile, problems);
+  }
+  std::optional<TimeSpan> nav_span;
+  if (auto nav = open(kNavFile, true)) {
+    survey.nav = parse_nav_csv(*nav, kNavFile, problems);
+    if (survey.nav.size() >= 2) nav_span = TimeSpan{survey.nav.front().time, survey.nav.back().time};
+  }
+  if (auto pings = open(kPingsFile, true)) {
+    parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams);
+  }
+  if (auto reference = open(kReferenceNavFile, false)) {
+    survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems);
+  }
+
+  BundleReadResult result;
+  if (!problems.has_errors()) result.survey = std::move(survey);
+  result.problems = problems.take();
+  return result;
+}
+
+namespace {
+std::string describe_errors(const std::vector<Problem>& problems) {
+  std::string text = "invalid survey bundle:";
+  for (const Problem& p : problems) {
+    if (p.severity == Problem::Severity::kError) text += "\n  " + p.to_string();
+  }
+  return text;
+}
+}  // namespace
+
+BundleError::BundleError(std::vector<Problem> problems)
+    : std::runtime_error(describe_errors(problems)), problems_(std::move(problems)) {}
+
+Survey load_bundle(const std::filesystem::path& dir) {
+  BundleReadResult result = read_bundle(dir);
+  if (!result.survey) throw BundleError(std::move(result.problems));
+  return std::move(*result.survey);
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,37 @@
+#include "core/io/byte_source.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace bathyslam {
+
+FileSource::FileSource(const std::filesystem::path& path)
+    : file_(std::fopen(path.c_str(), "rb")) {
+  if (file_ == nullptr) {
+    throw std::runtime_error(path.string() + ": cannot open: " + std::strerror(errno));
+  }
+}
+
+FileSource::~FileSource() { std::fclose(file_); }
+
+std::size_t FileSource::read(char* buffer, std::size_t size) {
+  return std::fread(buffer, 1, size, file_);
+}
+
+std::size_t MemorySource::read(char* buffer, std::size_t size) {
+  const std::size_t n = std::min(size, bytes_.size());
+  std::memcpy(buffer, bytes_.data(), n);
+  bytes_.remove_prefix(n);
+  return n;
+}
+
+std::string read_all(ByteSource& source) {
+  std::string out;
+  char buffer[1 << 16];
+  while (const std::size_t n = source.read(buffer, sizeof buffer)) out.append(buffer, n);
+  return out;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,44 @@
+#pragma once
+// Where the bytes of an input file come from: a file on disk, or bytes already in memory
+// (an upload held by the server). Parsers read through this so they never care which.
+#include <cstddef>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace bathyslam {
+
+class ByteSource {
+ public:
+  virtual ~ByteSource() = default;
+  // Copies up to `size` bytes into `buffer`; returns how many, 0 at the end.
+  virtual std::size_t read(char* buffer, std::size_t size) = 0;
+};
+
+class FileSource : public ByteSource {
+ public:
+  // Throws std::runtime_error naming the file when it cannot be opened.
+  explicit FileSource(const std::filesystem::path& path);
+  ~FileSource() override;
+  FileSource(const FileSource&) = delete;
+  FileSource& operator=(const FileSource&) = delete;
+  std::size_t read(char* buffer, std::size_t size) override;
+
+ private:
+  std::FILE* file_;
+};
+
+class MemorySource : public ByteSource {
+ public:
+  explicit MemorySource(std::string_view bytes) : bytes_(bytes) {}
+  std::size_t read(char* buffer, std::size_t size) override;
+
+ private:
+  std::string_view bytes_;
+};
+
+// Reads a whole source into a string (for small files such as survey.json).
+std::string read_all(ByteSource& source);
+
+}  // namespace bathyslam

@@ -1,0 +1,44 @@
+#pragma once
+// A problem found in an input: where it is (file, line, field) and what is wrong.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace bathyslam {
+
+struct Problem {
+  enum class Severity { kError, kWarning };
+  Severity severity = Severity::kError;
+  std::string file;
+  std::size_t line = 0;  // 1-based; 0 when the problem is about the whole file
+  std::string field;     // column or JSON key; empty when the whole line or file is at fault
+  std::string message;
+
+  // "nav.csv:12: heading: not a number: 'abc'"
+  std::string to_string() const;
+};
+
+// Collects problems, keeping at most `max_per_file` per file so a file with a million bad lines
+// still yields a readable report (the count of the rest is kept).
+class ProblemList {
+ public:
+  explicit ProblemList(std::size_t max_per_file = 50) : max_per_file_(max_per_file) {}
+
+  void error(std::string file, std::size_t line, std::string field, std::string message);
+  void warning(std::string file, std::size_t line, std::string field, std::string message);
+
+  bool has_errors() const { return errors_ > 0; }
+  std::size_t error_count() const { return errors_; }
+  // The kept problems, followed by one note per file whose problems were cut.
+  std::vector<Problem> take();
+
+ private:
+  void add(Problem problem);
+
+  std::size_t max_per_file_;
+  std::size_t errors_ = 0;
+  std::vector<Problem> problems_;
+  std::vector<std::pair<std::string, std::size_t>> dropped_;  // file, count
+};
+
+}  // namespace bathyslam

@@ -1,0 +1,42 @@
+#pragma once
+// `bathyslam simulate`: a survey with known truth, deterministic from its seed.
+#include <cstdint>
+#include <string>
+
+#include "core/sim/drift.h"
+#include "core/sim/sonar.h"
+#include "core/sim/terrain.h"
+#include "core/sim/trajectory.h"
+#include "core/types/survey.h"
+
+namespace bathyslam::sim {
+
+enum class DriftModel { kPaper, kDvl };
+DriftModel parse_drift_model(const std::string& name);  // throws std::invalid_argument
+std::string to_string(DriftModel model);
+
+struct SimulationConfig {
+  Scenario scenario = Scenario::kSmall;
+  uint64_t seed = 1;
+  DriftModel drift = DriftModel::kPaper;
+  PaperDrift paper_drift;
+  DvlDrift dvl_drift;
+  TerrainConfig terrain;  // its seed is replaced by `seed`
+  MotionConfig motion;    // its seed is replaced by `seed`
+  SonarConfig sonar;
+  double nav_rate_hz = 20.0;
+  std::string crs = "EPSG:32651";  // UTM 51N, where the paper's lake lies
+  double origin_easting = 452000.0;
+  double origin_northing = 4630000.0;
+};
+
+struct Simulation {
+  Survey survey;  // nav = dead reckoning, reference_nav = truth
+  Terrain terrain;
+  double sigma_yaw_rad = 0;  // the paper model's sigma_yaw used (0 for dvl)
+  DriftStats drift;
+};
+
+Simulation simulate(const SimulationConfig& config);
+
+}  // namespace bathyslam::sim

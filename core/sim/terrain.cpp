@@ -1,0 +1,180 @@
+#include "core/sim/terrain.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/sim/random.h"
+
+namespace bathyslam::sim {
+namespace {
+
+constexpr double kMarginM = 60.0;
+
+double smoothstep(double edge0, double edge1, double x) {
+  const double t = std::clamp((x - edge0) / (edge1 - edge0), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// Random values on a square lattice, interpolated smoothly: the building block of the relief.
+class ValueNoise {
+ public:
+  ValueNoise(const Area& area, double spacing_m, double sigma, std::mt19937_64& rng)
+      : origin_(area.min), spacing_(spacing_m) {
+    cols_ = static_cast<int>(std::ceil((area.max.x() - area.min.x()) / spacing_m)) + 2;
+    rows_ = static_cast<int>(std::ceil((area.max.y() - area.min.y()) / spacing_m)) + 2;
+    std::normal_distribution<double> normal(0.0, sigma);
+    values_.resize(static_cast<std::size_t>(cols_) * rows_);
+    for (double& v : values_) v = normal(rng);
+  }
+
+  double operator()(double x, double y) const {
+    const double u = std::clamp((x - origin_.x()) / spacing_, 0.0, cols_ - 1.001);
+    const double v = std::clamp((y - origin_.y()) / spacing_, 0.0, rows_ - 1.001);
+    const int i = static_cast<int>(u), j = static_cast<int>(v);
+    const double fu = smoothstep(0, 1, u - i), fv = smoothstep(0, 1, v - j);
+    auto at = [&](int a, int b) { return values_[static_cast<std::size_t>(b) * cols_ + a]; };
+    return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
+           fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
+  }
+
+ private:
+  Eigen::Vector2d origin_;
+  double spacing_;
+  int cols_ = 0, rows_ = 0;
+  std::vector<double> values_;
+};
+
+// An elongated Gaussian bump (ridge, or channel with negative height) or a round one (mound,
+// where half_length is 0).
+struct Feature {
+  Eigen::Vector2d centre;
+  Eigen::Vector2d direction{1, 0};
+  double half_length = 0;
+  double sigma = 1;
+  double height = 0;
+
+  double reach() const { return half_length + 3.0 * sigma; }
+  double operator()(const Eigen::Vector2d& p) const {
+    const Eigen::Vector2d d = p - centre;
+    const double along = std::max(0.0, std::abs(d.dot(direction)) - half_length);
+    const double across = d.x() * direction.y() - d.y() * direction.x();
+    return height * std::exp(-(along * along + across * across) / (2 * sigma * sigma));
+  }
+};
+
+std::vector<Feature> scatter_features(const TerrainConfig& config, const Area& area,
+                                      std::mt19937_64& rng) {
+  const double square_m = (area.max - area.min).prod();
+  std::uniform_real_distribution<double> ux(area.min.x(), area.max.x());
+  std::uniform_real_distribution<double> uy(area.min.y(), area.max.y());
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto between = [&](double a, double b) { return a + (b - a) * unit(rng); };
+  auto direction = [&] {
+    const double a = between(0, M_PI);
+    return Eigen::Vector2d(std::cos(a), std::sin(a));
+  };
+
+  std::vector<Feature> features;
+  const auto count = [&](double density) { return static_cast<int>(density * square_m); };
+  for (int k = 0; k < count(config.mound_density); ++k) {
+    const double sign = unit(rng) < 0.8 ? 1.0 : -1.0;  // mostly mounds, some pits
+    features.push_back({{ux(rng), uy(rng)}, {1, 0}, 0.0, between(2, 7), sign * between(0.4, 2.0)});
+  }
+  for (int k = 0; k < count(config.ridge_density); ++k) {
+    features.push_back({{ux(rng), uy(rng)}, direction(), between(10, 35), between(1.5, 4),
+                        between(0.5, 1.5)});
+  }
+  for (int k = 0; k < count(config.channel_density); ++k) {
+    features.push_back({{ux(rng), uy(rng)}, direction(), between(20, 50), between(2, 5),
+                        -between(0.5, 1.5)});
+  }
+  return features;
+}
+
+}  // namespace
+
+Terrain Terrain::generate(const TerrainConfig& config, const Area& area) {
+  Terrain t;
+  t.area_ = {area.min.array() - kMarginM, area.max.array() + kMarginM};
+  t.cell_m_ = config.cell_m;
+  t.cols_ = static_cast<int>(std::ceil((t.area_.max.x() - t.area_.min.x()) / t.cell_m_)) + 1;
+  t.rows_ = static_cast<int>(std::ceil((t.area_.max.y() - t.area_.min.y()) / t.cell_m_)) + 1;
+  const std::size_t cells = static_cast<std::size_t>(t.cols_) * t.rows_;
+  t.elevation_.assign(cells, static_cast<float>(-config.mean_depth_m));
+  t.roughness_.assign(cells, 0.0f);
+  if (config.flat_only) {
+    t.max_slope_ = 0.0;
+    return t;
+  }
+
+  auto rng = make_rng(config.seed, kTerrainStream);
+  // Rough and flat regions: a checkerboard of region-sized cells with some squares flipped, so
+  // the pattern alternates but is not regular; smoothed into transitions a few tens of metres wide.
+  const ValueNoise region_jitter(t.area_, config.region_size_m, 0.25, rng);
+  auto region_weight = [&](double x, double y) {
+    const double u = (x - t.area_.min.x()) / config.region_size_m;
+    const double v = (y - t.area_.min.y()) / config.region_size_m;
+    const double checker = 0.5 + 0.5 * std::sin(M_PI * u) * std::sin(M_PI * v);
+    return smoothstep(0.35, 0.65, checker + region_jitter(x, y));
+  };
+  const ValueNoise regional(t.area_, 250.0, config.regional_relief_m, rng);
+  const ValueNoise fine_coarse(t.area_, 3.0, config.fine_roughness_m, rng);
+  const ValueNoise fine_detail(t.area_, 1.2, 0.5 * config.fine_roughness_m, rng);
+  std::normal_distribution<float> sediment(0.0f, static_cast<float>(config.flat_roughness_m));
+
+  // Relief of the rough regions before weighting: features splatted over their reach.
+  std::vector<float> relief(cells, 0.0f);
+  for (const Feature& f : scatter_features(config, t.area_, rng)) {
+    const double r = f.reach();
+    const int i0 = std::max(0, static_cast<int>((f.centre.x() - r - t.area_.min.x()) / t.cell_m_));
+    const int i1 = std::min(t.cols_ - 1, static_cast<int>((f.centre.x() + r - t.area_.min.x()) / t.cell_m_));
+    const int j0 = std::max(0, static_cast<int>((f.centre.y() - r - t.area_.min.y()) / t.cell_m_));
+    const int j1 = std::min(t.rows_ - 1, static_cast<int>((f.centre.y() + r - t.area_.min.y()) / t.cell_m_));
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) {
+        const Eigen::Vector2d p(t.area_.min.x() + i * t.cell_m_, t.area_.min.y() + j * t.cell_m_);
+        relief[static_cast<std::size_t>(j) * t.cols_ + i] += static_cast<float>(f(p));
+      }
+    }
+  }
+
+  for (int j = 0; j < t.rows_; ++j) {
+    for (int i = 0; i < t.cols_; ++i) {
+      const double x = t.area_.min.x() + i * t.cell_m_, y = t.area_.min.y() + j * t.cell_m_;
+      const std::size_t c = static_cast<std::size_t>(j) * t.cols_ + i;
+      const double w = region_weight(x, y);
+      const double rough = relief[c] + fine_coarse(x, y) + fine_detail(x, y);
+      t.roughness_[c] = static_cast<float>(w);
+      t.elevation_[c] = static_cast<float>(-config.mean_depth_m + regional(x, y) + w * rough) +
+                        sediment(rng);
+    }
+  }
+
+  // Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
+  float steepest = 0;
+  for (int j = 0; j + 1 < t.rows_; ++j) {
+    for (int i = 0; i + 1 < t.cols_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * t.cols_ + i;
+      steepest = std::max({steepest, std::abs(t.elevation_[c + 1] - t.elevation_[c]),
+                           std::abs(t.elevation_[c + t.cols_] - t.elevation_[c])});
+    }
+  }
+  t.max_slope_ = 2.0 * steepest / t.cell_m_;
+  return t;
+}
+
+double Terrain::sample(const std::vector<float>& grid, double x, double y) const {
+  const double u = std::clamp((x - area_.min.x()) / cell_m_, 0.0, cols_ - 1.0001);
+  const double v = std::clamp((y - area_.min.y()) / cell_m_, 0.0, rows_ - 1.0001);
+  const int i = static_cast<int>(u), j = static_cast<int>(v);
+  const double fu = u - i, fv = v - j;
+  const float* row = grid.data() + static_cast<std::size_t>(j) * cols_ + i;
+  return (1 - fv) * ((1 - fu) * row[0] + fu * row[1]) +
+         fv * ((1 - fu) * row[cols_] + fu * row[cols_ + 1]);
+}
+
+double Terrain::elevation(double x, double y) const { return sample(elevation_, x, y); }
+
+double Terrain::roughness_weight(double x, double y) const { return sample(roughness_, x, y); }
+
+}  // namespace bathyslam::sim

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The CLI as a user runs it: simulate a survey, inspect it, and refuse a broken one clearly.
+set -euo pipefail
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+"$BATHYSLAM" simulate --scenario small --seed 3 --drift dvl --out "$work/s" > "$work/sim.txt"
+grep -q "simulated small (seed 3)" "$work/sim.txt"
+
+"$BATHYSLAM" inspect "$work/s" > "$work/inspect.txt"
+grep -qE "^lines       [67]$" "$work/inspect.txt"
+/usr/bin/python3 - "$work/s" <<'PY'
+import json, subprocess, sys, os
+out = subprocess.run([os.environ["BATHYSLAM"], "inspect", "--json", sys.argv[1]],
+                     check=True, capture_output=True, text=True).stdout
+j = json.loads(out)
+assert j["line_count"] in (6, 7), j["line_count"]
+assert j["counts"]["soundings"] == 512 * j["counts"]["pings"], j["counts"]
+assert j["drift"]["end_m"] > 0, j["drift"]
+PY
+
+# A bundle with a broken line: a non-zero exit and a message naming file, line and field.
+sed -i '5s/^\([^,]*\),[^,]*,/\1,oops,/' "$work/s/nav.csv"
+if "$BATHYSLAM" inspect "$work/s" 2> "$work/err.txt"; then
+  echo "inspect accepted a broken bundle" >&2
+  exit 1
+fi
+grep -q "nav.csv:5: easting: not a number: 'oops'" "$work/err.txt"
+echo "cli: simulate and inspect ok"

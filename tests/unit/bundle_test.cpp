@@ -1,0 +1,262 @@
+#include "core/io/bundle.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace bathyslam {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+Survey tiny_survey() {
+  Survey s;
+  s.metadata.name = "tiny";
+  s.metadata.crs = "EPSG:32651";
+  s.metadata.sonar = {{"model", "test"}, {"beams", 3}};
+  s.metadata.vehicle = {{"model", "test auv"}};
+  for (int i = 0; i < 5; ++i) {
+    s.nav.push_back({1720000000.0 + i * 0.5, 452000.125 + i, 4630000.5, 1.25, 0.5, -0.25, 89.875});
+  }
+  s.reference_nav = s.nav;
+  (*s.reference_nav)[3].easting += 0.3;
+  for (int p = 0; p < 3; ++p) {
+    s.pings.push_back({1720000000.1 + p * 0.7, static_cast<uint32_t>(s.beams.size()), 3});
+    for (uint32_t b = 0; b < 3; ++b) {
+      s.beams.push_back({b * 2, 0.0f, -5.125f + b * 5.0f, 9.875f + 0.001f * p});
+    }
+  }
+  return s;
+}
+
+class BundleTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("bathyslam_bundle_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    write_bundle(tiny_survey(), dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::vector<std::string> lines_of(std::string_view file) {
+    std::ifstream in(dir_ / file);
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+  }
+  void write_lines(std::string_view file, const std::vector<std::string>& lines) {
+    std::ofstream out(dir_ / file, std::ios::trunc);
+    for (const auto& l : lines) out << l << '\n';
+  }
+  // Replaces line `number` (1-based) of `file`.
+  void replace_line(std::string_view file, std::size_t number, const std::string& text) {
+    auto lines = lines_of(file);
+    lines.at(number - 1) = text;
+    write_lines(file, lines);
+  }
+  // Reads the bundle, expecting it to fail; returns the problems as "file:line: ..." strings.
+  std::string expect_rejected() {
+    const BundleReadResult result = read_bundle(dir_);
+    EXPECT_FALSE(result.survey.has_value()) << "a bad bundle must yield no survey";
+    std::string all;
+    for (const Problem& p : result.problems) all += p.to_string() + "\n";
+    return all;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(BundleTest, RoundTripKeepsEveryValueExactly) {
+  const Survey original = tiny_survey();
+  const BundleReadResult result = read_bundle(dir_);
+  ASSERT_TRUE(result.survey) << (result.problems.empty() ? "" : result.problems[0].to_string());
+  EXPECT_TRUE(result.problems.empty());
+  const Survey& read = *result.survey;
+  EXPECT_EQ(read.metadata.name, original.metadata.name);
+  EXPECT_EQ(read.metadata.crs, original.metadata.crs);
+  EXPECT_EQ(read.metadata.sonar, original.metadata.sonar);
+  EXPECT_EQ(read.metadata.vehicle, original.metadata.vehicle);
+  ASSERT_EQ(read.nav.size(), original.nav.size());
+  for (std::size_t i = 0; i < read.nav.size(); ++i) {
+    EXPECT_EQ(read.nav[i].time, original.nav[i].time);
+    EXPECT_EQ(read.nav[i].easting, original.nav[i].easting);
+    EXPECT_EQ(read.nav[i].heading_deg, original.nav[i].heading_deg);
+    EXPECT_EQ((*read.reference_nav)[i].easting, (*original.reference_nav)[i].easting);
+  }
+  ASSERT_EQ(read.pings.size(), original.pings.size());
+  ASSERT_EQ(read.beams.size(), original.beams.size());
+  for (std::size_t p = 0; p < read.pings.size(); ++p) {
+    EXPECT_EQ(read.pings[p].time, original.pings[p].time);
+    EXPECT_EQ(read.pings[p].beam_count, original.pings[p].beam_count);
+  }
+  for (std::size_t b = 0; b < read.beams.size(); ++b) {
+    EXPECT_EQ(read.beams[b].index, original.beams[b].index);
+    EXPECT_EQ(read.beams[b].across, original.beams[b].across);
+    EXPECT_EQ(read.beams[b].down, original.beams[b].down);
+  }
+  // Writing what was read gives the same bytes.
+  const fs::path again = dir_.string() + "_again";
+  write_bundle(read, again);
+  for (auto file : {kNavFile, kPingsFile, kSurveyJsonFile, kReferenceNavFile}) {
+    std::ifstream a(dir_ / file), b(again / file);
+    std::stringstream sa, sb;
+    sa << a.rdbuf();
+    sb << b.rdbuf();
+    EXPECT_EQ(sa.str(), sb.str()) << file;
+  }
+  fs::remove_all(again);
+}
+
+TEST_F(BundleTest, ReferenceNavIsOptional) {
+  fs::remove(dir_ / kReferenceNavFile);
+  const BundleReadResult result = read_bundle(dir_);
+  ASSERT_TRUE(result.survey);
+  EXPECT_FALSE(result.survey->reference_nav);
+}
+
+TEST_F(BundleTest, UnknownEpsgCodeIsNamedWithLineAndField) {
+  auto lines = lines_of(kSurveyJsonFile);
+  for (auto& l : lines) {
+    if (l.find("\"crs\"") != std::string::npos) l = "  \"crs\": \"EPSG:999999\",";
+  }
+  write_lines(kSurveyJsonFile, lines);
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("survey.json:2: crs: 'EPSG:999999' is not a CRS that PROJ knows"));
+}
+
+TEST_F(BundleTest, GeographicCrsIsRejected) {
+  auto lines = lines_of(kSurveyJsonFile);
+  for (auto& l : lines) {
+    if (l.find("\"crs\"") != std::string::npos) l = "  \"crs\": \"EPSG:4326\",";
+  }
+  write_lines(kSurveyJsonFile, lines);
+  EXPECT_THAT(expect_rejected(), HasSubstr("crs: 'EPSG:4326' (WGS 84) is not a projected CRS"));
+}
+
+TEST_F(BundleTest, CrsMustBeAnEpsgCode) {
+  write_lines(kSurveyJsonFile, {R"({"name": "x", "crs": "UTM 51N"})"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json:1: crs: 'UTM 51N' is not of the form EPSG:<code>"));
+}
+
+TEST_F(BundleTest, MissingNameAndBrokenJson) {
+  write_lines(kSurveyJsonFile, {R"({"crs": "EPSG:32651"})"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json:1: name: missing"));
+  write_lines(kSurveyJsonFile, {"{", R"(  "name": "x",)", R"(  "crs": EPSG)", "}"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json:3: not valid JSON"));
+}
+
+TEST_F(BundleTest, NavHeaderMustBeExact) {
+  replace_line(kNavFile, 1, "time,easting,northing,depth,roll,pitch,yaw");
+  EXPECT_THAT(expect_rejected(),
+              HasSubstr("nav.csv:1: header is 'time,easting,northing,depth,roll,pitch,yaw'; "
+                        "expected exactly 'time,easting,northing,depth,roll,pitch,heading'"));
+}
+
+TEST_F(BundleTest, NavNanIsNamedWithLineAndColumn) {
+  replace_line(kNavFile, 3, "1720000000.5,nan,4630000.5,1.25,0.5,-0.25,89.875");
+  EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv:3: easting: not finite: 'nan'"));
+}
+
+TEST_F(BundleTest, NavInfinityAndGarbage) {
+  replace_line(kNavFile, 2, "1720000000,452000.125,4630000.5,inf,0.5,-0.25,north");
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("nav.csv:2: depth: not finite: 'inf'"));
+  EXPECT_THAT(problems, HasSubstr("nav.csv:2: heading: not a number: 'north'"));
+}
+
+TEST_F(BundleTest, NavTimeGoingBackwards) {
+  replace_line(kNavFile, 4, "1719999999,452002.125,4630000.5,1.25,0.5,-0.25,89.875");
+  EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv:4: time: goes backwards: 1719999999"));
+}
+
+TEST_F(BundleTest, NavWrongFieldCountAndAttitudeRange) {
+  replace_line(kNavFile, 2, "1720000000,452000.125,4630000.5");
+  replace_line(kNavFile, 5, "1720000001.5,452003.125,4630000.5,1.25,95,-0.25,89.875");
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("nav.csv:2: 3 fields; expected 7"));
+  EXPECT_THAT(problems, HasSubstr("nav.csv:5: roll: outside ±90°"));
+}
+
+TEST_F(BundleTest, NavWithoutSamples) {
+  write_lines(kNavFile, {std::string(kNavHeader)});
+  EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv: needs at least 2 navigation samples, has 0"));
+}
+
+TEST_F(BundleTest, ReferenceNavIsValidatedToo) {
+  replace_line(kReferenceNavFile, 6, "1720000002,452004.125,4630000.5,1.25,0.5,-0.25,");
+  EXPECT_THAT(expect_rejected(), HasSubstr("reference_nav.csv:6: heading: not a number: ''"));
+}
+
+TEST_F(BundleTest, PingsHeaderMustBeExact) {
+  replace_line(kPingsFile, 1, "time,beam,x,y,z");
+  EXPECT_THAT(expect_rejected(), HasSubstr("pings.csv:1: header is 'time,beam,x,y,z'"));
+}
+
+TEST_F(BundleTest, PingInfinityIsNamedWithLineAndColumn) {
+  replace_line(kPingsFile, 5, "1720000000.8,0,0,-inf,9.876");
+  EXPECT_THAT(expect_rejected(), HasSubstr("pings.csv:5: across: not finite: '-inf'"));
+}
+
+TEST_F(BundleTest, PingBeamsMustIncreaseWithinAPing) {
+  replace_line(kPingsFile, 4, "1720000000.1,2,0,4.875,9.875");
+  EXPECT_THAT(expect_rejected(),
+              HasSubstr("pings.csv:4: beam: beam 2 follows beam 2 in the same ping"));
+}
+
+TEST_F(BundleTest, PingNegativeBeamIndex) {
+  replace_line(kPingsFile, 2, "1720000000.1,-1,0,-5.125,9.875");
+  EXPECT_THAT(expect_rejected(), HasSubstr("pings.csv:2: beam: not a number: '-1'"));
+}
+
+TEST_F(BundleTest, PingTimeGoingBackwards) {
+  replace_line(kPingsFile, 6, "1720000000,0,0,-5.125,9.876");
+  EXPECT_THAT(expect_rejected(), HasSubstr("pings.csv:6: time: goes backwards"));
+}
+
+TEST_F(BundleTest, MissingPingsFile) {
+  fs::remove(dir_ / kPingsFile);
+  EXPECT_THAT(expect_rejected(), HasSubstr("pings.csv: missing from"));
+}
+
+TEST_F(BundleTest, PingsOutsideNavigationAreReportedButKept) {
+  // Navigation now ends at 1720000001.0: the last ping (1720000001.5) lies outside it.
+  auto nav = lines_of(kNavFile);
+  nav.resize(4);
+  write_lines(kNavFile, nav);
+  const BundleReadResult result = read_bundle(dir_);
+  ASSERT_TRUE(result.survey);
+  ASSERT_EQ(result.problems.size(), 1u);
+  EXPECT_EQ(result.problems[0].severity, Problem::Severity::kWarning);
+  EXPECT_THAT(result.problems[0].to_string(),
+              HasSubstr("pings.csv:8: warning: time: 1 pings lie outside the navigation's time span"));
+}
+
+TEST_F(BundleTest, ProblemsAreCappedPerFileWithACount) {
+  auto lines = lines_of(kPingsFile);
+  for (int i = 0; i < 200; ++i) lines.push_back("1720000001.9,x,0,0,0");
+  write_lines(kPingsFile, lines);
+  const BundleReadResult result = read_bundle(dir_);
+  EXPECT_FALSE(result.survey);
+  ASSERT_EQ(result.problems.size(), 51u);
+  EXPECT_EQ(result.problems.back().to_string(), "pings.csv: 150 more problems not listed");
+}
+
+TEST_F(BundleTest, LoadBundleThrowsWithEveryError) {
+  replace_line(kNavFile, 3, "1720000000.5,nan,4630000.5,1.25,0.5,-0.25,89.875");
+  replace_line(kPingsFile, 5, "1720000000.8,0,0,-inf,9.876");
+  try {
+    load_bundle(dir_);
+    FAIL() << "expected BundleError";
+  } catch (const BundleError& e) {
+    EXPECT_EQ(e.problems().size(), 2u);
+    EXPECT_THAT(e.what(), HasSubstr("nav.csv:3: easting"));
+    EXPECT_THAT(e.what(), HasSubstr("pings.csv:5: across"));
+  }
+}
+
+}  // namespace
+}  // namespace bathyslam
