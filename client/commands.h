@@ -6,5 +6,6 @@ namespace bathyslam::cli {
 
 void add_simulate_command(CLI::App& app);
 void add_inspect_command(CLI::App& app);
+void add_process_command(CLI::App& app);
 
 }  // namespace bathyslam::cli

@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   bathyslam::cli::add_simulate_command(app);
   bathyslam::cli::add_inspect_command(app);
+  bathyslam::cli::add_process_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -67,4 +67,7 @@ Survey load_bundle(const std::filesystem::path& dir);
 // shortest exact form: reading the bundle back gives the same values.
 void write_bundle(const Survey& survey, const std::filesystem::path& dir);
 
+// Writes navigation in the nav.csv format (header and columns), atomically.
+void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::path& path);
+
 }  // namespace bathyslam

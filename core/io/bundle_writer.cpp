@@ -71,7 +71,9 @@ class AtomicFileWriter {
   std::string buffer_;
 };
 
-void write_nav(const std::vector<NavSample>& nav, const std::filesystem::path& path) {
+}  // namespace
+
+void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::path& path) {
   AtomicFileWriter out(path);
   out.text(kNavHeader);
   out.end_line();
@@ -85,6 +87,8 @@ void write_nav(const std::vector<NavSample>& nav, const std::filesystem::path& p
   }
   out.commit();
 }
+
+namespace {
 
 void write_pings(const Survey& survey, const std::filesystem::path& path) {
   AtomicFileWriter out(path);
@@ -120,10 +124,10 @@ void write_bundle(const Survey& survey, const std::filesystem::path& dir) {
   json_out.text(json.dump(2));
   json_out.end_line();
   json_out.commit();
-  write_nav(survey.nav, dir / kNavFile);
+  write_nav_csv(survey.nav, dir / kNavFile);
   write_pings(survey, dir / kPingsFile);
   if (survey.reference_nav) {
-    write_nav(*survey.reference_nav, dir / kReferenceNavFile);
+    write_nav_csv(*survey.reference_nav, dir / kReferenceNavFile);
   } else {
     std::filesystem::remove(dir / kReferenceNavFile);
   }

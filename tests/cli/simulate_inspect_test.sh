@@ -27,3 +27,21 @@ if "$BATHYSLAM" inspect "$work/s" 2> "$work/err.txt"; then
 fi
 grep -q "nav.csv:5: easting: not a number: 'oops'" "$work/err.txt"
 echo "cli: simulate and inspect ok"
+
+# Offline processing: odometry keeps dead reckoning, so its trajectory error is the DR error.
+sed -i "5s/,oops,/,$(sed -n 5p "$work/s/reference_nav.csv" | cut -d, -f2),/" "$work/s/nav.csv"
+"$BATHYSLAM" process "$work/s" --config odometry --out "$work/odo" > "$work/odo.txt" 2>/dev/null
+/usr/bin/python3 - "$work/odo/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+t = r["trajectory_error_m"]
+assert abs(t["optimized"]["rmse"] - t["dead_reckoning"]["rmse"]) < 1e-6, t
+assert r["consistency_error_m"]["optimized"]["count"] > 1000, r["consistency_error_m"]
+PY
+test -s "$work/odo/trajectory.csv" && test -s "$work/odo/consistency_histogram.png"
+if "$BATHYSLAM" process "$work/s" --set gicp.max_iterations=-3 --out "$work/bad" 2> "$work/err.txt"; then
+  echo "process accepted an out-of-range parameter" >&2
+  exit 1
+fi
+grep -q "parameter 'gicp.max_iterations': -3 is outside" "$work/err.txt"
+echo "cli: process ok"

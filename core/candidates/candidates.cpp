@@ -1,0 +1,102 @@
+#include "core/candidates/candidates.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include <opencv2/imgproc.hpp>
+
+namespace bathyslam {
+namespace {
+
+constexpr double kCellM = 50.0;
+
+bool lines_are_adjacent(const std::vector<SurveyLine>& lines, int a, int b, const CandidateConfig& c) {
+  if (a < 0 || b < 0 || a == b || std::abs(a - b) > c.k_adjacent_lines) return false;
+  double d = std::fmod(std::abs(lines[a].course_deg - lines[b].course_deg), 180.0);
+  d = std::min(d, 180.0 - d);
+  return d <= c.parallel_tolerance_deg;
+}
+
+// Grid cells (keyed) covered by a footprint's bounding box.
+std::vector<int64_t> cells_of(const Footprint& f) {
+  Eigen::Vector2d lo = f.corners[0], hi = f.corners[0];
+  for (const auto& c : f.corners) {
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  std::vector<int64_t> cells;
+  for (auto i = static_cast<int64_t>(std::floor(lo.x() / kCellM)); i <= std::floor(hi.x() / kCellM); ++i) {
+    for (auto j = static_cast<int64_t>(std::floor(lo.y() / kCellM)); j <= std::floor(hi.y() / kCellM); ++j) {
+      cells.push_back((i << 32) ^ (j & 0xffffffff));
+    }
+  }
+  return cells;
+}
+
+}  // namespace
+
+Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose) {
+  Eigen::Vector2f lo(0, 0), hi(0, 0);
+  if (!submap.points.empty()) lo = hi = submap.points.front().head<2>();
+  for (const Eigen::Vector3f& p : submap.points) {
+    lo = lo.cwiseMin(p.head<2>());
+    hi = hi.cwiseMax(p.head<2>());
+  }
+  Footprint f;
+  const Eigen::Vector2f local[4] = {{lo.x(), lo.y()}, {hi.x(), lo.y()}, {hi.x(), hi.y()}, {lo.x(), hi.y()}};
+  for (int k = 0; k < 4; ++k) {
+    f.corners[k] = (pose * Eigen::Vector3d(local[k].x(), local[k].y(), 0.0)).head<2>();
+  }
+  f.area_m2 = std::abs(static_cast<double>((hi - lo).prod()));
+  return f;
+}
+
+double overlap_area_m2(const Footprint& a, const Footprint& b) {
+  auto polygon = [](const Footprint& f) {
+    std::vector<cv::Point2f> p;
+    for (const auto& c : f.corners) p.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+    if (cv::contourArea(p, true) < 0) std::reverse(p.begin(), p.end());
+    return p;
+  };
+  std::vector<cv::Point2f> intersection;
+  return cv::intersectConvexConvex(polygon(a), polygon(b), intersection, true);
+}
+
+std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
+                                                    const std::vector<Eigen::Isometry3d>& poses,
+                                                    const CandidateConfig& config) {
+  std::vector<Footprint> footprints;
+  std::unordered_map<int64_t, std::vector<int>> grid;
+  for (const Submap& s : set.submaps) {
+    footprints.push_back(footprint_of(s, poses[s.index]));
+    if (s.line < 0) continue;
+    for (int64_t cell : cells_of(footprints.back())) grid[cell].push_back(s.index);
+  }
+
+  std::vector<CandidatePair> pairs;
+  std::vector<int> near;
+  for (const Submap& s : set.submaps) {
+    if (s.line < 0) continue;
+    near.clear();
+    for (int64_t cell : cells_of(footprints[s.index])) {
+      const auto it = grid.find(cell);
+      if (it == grid.end()) continue;
+      for (int other : it->second) {
+        if (other < s.index) near.push_back(other);
+      }
+    }
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    for (int other : near) {
+      if (!lines_are_adjacent(set.lines, set.submaps[other].line, s.line, config)) continue;
+      const double smaller = std::min(footprints[other].area_m2, footprints[s.index].area_m2);
+      if (smaller <= 0) continue;
+      const double fraction = overlap_area_m2(footprints[other], footprints[s.index]) / smaller;
+      if (fraction >= config.min_overlap_fraction) pairs.push_back({other, s.index, fraction});
+    }
+  }
+  return pairs;
+}
+
+}  // namespace bathyslam

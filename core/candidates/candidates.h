@@ -1,0 +1,44 @@
+#pragma once
+// candidates: pairs of submaps worth registering, from their dead-reckoning footprints.
+#include <array>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/submaps/submap.h"
+
+namespace bathyslam {
+
+// A submap's footprint on the seafloor: the rectangle its soundings span in the submap frame,
+// placed in the map frame (x, y) by a pose.
+struct Footprint {
+  std::array<Eigen::Vector2d, 4> corners;
+  double area_m2 = 0;
+};
+
+Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose);
+
+// Area of the intersection of two footprints.
+double overlap_area_m2(const Footprint& a, const Footprint& b);
+
+struct CandidateConfig {
+  int k_adjacent_lines = 3;            // Table 1 (a)
+  double parallel_tolerance_deg = 20;  // lines within this of parallel or antiparallel
+  // Intersection over the smaller footprint. Table 1's "overlap coverage 0.9" cannot hold between
+  // lawnmower lines that share only ~40 % of a swath; see the README.
+  double min_overlap_fraction = 0.1;
+};
+
+struct CandidatePair {
+  int target = 0;  // earlier submap
+  int source = 0;  // later submap
+  double overlap_fraction = 0;
+};
+
+// Pairs on K-adjacent parallel lines whose footprints (at `poses`) overlap enough. A grid index
+// over the footprints keeps this near-linear in the number of submaps.
+std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
+                                                    const std::vector<Eigen::Isometry3d>& poses,
+                                                    const CandidateConfig& config = {});
+
+}  // namespace bathyslam

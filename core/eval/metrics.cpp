@@ -1,0 +1,93 @@
+#include "core/eval/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+namespace bathyslam {
+
+ErrorStats error_stats(std::vector<double> errors) {
+  ErrorStats s;
+  s.count = errors.size();
+  if (errors.empty()) return s;
+  std::sort(errors.begin(), errors.end());
+  const double n = static_cast<double>(errors.size());
+  double sum = 0, sum_sq = 0;
+  for (double e : errors) {
+    sum += e;
+    sum_sq += e * e;
+  }
+  s.mean = sum / n;
+  s.rmse = std::sqrt(sum_sq / n);
+  s.std = std::sqrt(std::max(0.0, sum_sq / n - s.mean * s.mean));
+  auto percentile = [&](double p) { return errors[static_cast<std::size_t>(std::floor(p * (n - 1)))]; };
+  s.p50 = percentile(0.50);
+  s.p95 = percentile(0.95);
+  s.p99 = percentile(0.99);
+  s.max = errors.back();
+  return s;
+}
+
+ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                    const ConsistencyConfig& config) {
+  struct Sum {
+    double z = 0;
+    int n = 0;
+  };
+  // Key: cell (20 bits each way, 1 m cells reach ±500 km) and line (up to 2^20 lines).
+  auto key = [](int64_t ix, int64_t iy, int line) {
+    return (static_cast<uint64_t>(ix & 0xFFFFF) << 40) | (static_cast<uint64_t>(iy & 0xFFFFF) << 20) |
+           static_cast<uint64_t>(line);
+  };
+  std::unordered_map<uint64_t, Sum> per_line_cell;
+  for (const Submap& s : set.submaps) {
+    if (s.line < 0) continue;
+    const Eigen::Isometry3f pose = poses[s.index].cast<float>();
+    for (const Eigen::Vector3f& p : s.points) {
+      const Eigen::Vector3f m = pose * p;
+      Sum& sum = per_line_cell[key(static_cast<int64_t>(std::floor(m.x() / config.cell_m)),
+                                   static_cast<int64_t>(std::floor(m.y() / config.cell_m)), s.line)];
+      sum.z += m.z();
+      ++sum.n;
+    }
+  }
+  struct Spread {
+    double lo = INFINITY, hi = -INFINITY;
+    int lines = 0;
+  };
+  std::unordered_map<uint64_t, Spread> per_cell;
+  for (const auto& [k, sum] : per_line_cell) {
+    if (sum.n < config.min_soundings) continue;
+    Spread& spread = per_cell[k >> 20];
+    const double mean = sum.z / sum.n;
+    spread.lo = std::min(spread.lo, mean);
+    spread.hi = std::max(spread.hi, mean);
+    ++spread.lines;
+  }
+  std::vector<double> errors;
+  for (const auto& [cell, spread] : per_cell) {
+    if (spread.lines >= 2) errors.push_back(spread.hi - spread.lo);
+  }
+  ConsistencyReport report;
+  report.histogram.bin_width = config.histogram_bin_m;
+  report.histogram.counts.assign(config.histogram_bins, 0);
+  for (double e : errors) {
+    const auto bin = std::min<std::size_t>(static_cast<std::size_t>(e / config.histogram_bin_m),
+                                           config.histogram_bins - 1);
+    ++report.histogram.counts[bin];
+  }
+  report.stats = error_stats(std::move(errors));
+  return report;
+}
+
+std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses) {
+  std::vector<double> errors;
+  for (const Submap& s : set.submaps) {
+    if (!s.reference_pose) continue;
+    errors.push_back((poses[s.index].translation() - s.reference_pose->translation()).head<2>().norm());
+  }
+  return errors;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,42 @@
+#pragma once
+// eval: the quality report's numbers (design.md, "Evaluation").
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/submaps/submap.h"
+
+namespace bathyslam {
+
+struct ErrorStats {
+  double rmse = 0, mean = 0, std = 0, p50 = 0, p95 = 0, p99 = 0, max = 0;
+  std::size_t count = 0;
+};
+ErrorStats error_stats(std::vector<double> errors);
+
+struct Histogram {
+  double bin_width = 0;
+  std::vector<std::size_t> counts;  // the last bin also holds everything beyond it
+};
+
+struct ConsistencyConfig {
+  double cell_m = 1.0;
+  int min_soundings = 3;  // per line and cell
+  double histogram_bin_m = 0.02;
+  int histogram_bins = 100;
+};
+
+struct ConsistencyReport {
+  ErrorStats stats;
+  Histogram histogram;
+};
+
+// Roman & Singh consistency: per cell seen by two or more lines, the largest difference between
+// the lines' mean elevations there. Submaps off the lines (turns) do not take part.
+ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                    const ConsistencyConfig& config = {});
+
+// Horizontal distance of each submap pose from its reference pose (the first pose is shared).
+std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);
+
+}  // namespace bathyslam

@@ -1,0 +1,46 @@
+#pragma once
+// graph: the pose graph over submap poses, solved with Ceres (as Ceres' pose_graph_3d example).
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace bathyslam {
+
+using Information6 = Eigen::Matrix<double, 6, 6>;
+
+// A relative-pose constraint: `measured` is the pose of node `to` in the frame of node `from`.
+// Residual order: translation x, y, z (from's frame), then rotation about x, y, z (roll, pitch,
+// yaw for a vehicle frame).
+struct PoseGraphEdge {
+  int from = 0;
+  int to = 0;
+  Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();
+  Information6 information = Information6::Identity();
+  bool robust = false;  // Huber loss (registrations); odometry edges are trusted as Gaussian
+};
+
+// Diagonal information from standard deviations (metres, radians).
+Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
+                                     const Eigen::Vector3d& rotation_rad);
+
+struct GraphConfig {
+  // Table 1 (c): DR noise, translation (5, 5, 1) m and rotation (1e-4, 1e-4, 1e-2) rad.
+  Eigen::Vector3d dr_sigma_translation_m{5.0, 5.0, 1.0};
+  Eigen::Vector3d dr_sigma_rotation_rad{1e-4, 1e-4, 1e-2};
+  double huber_delta = 1.0;  // on whitened residuals
+  int max_iterations = 200;
+};
+
+struct GraphSolution {
+  std::vector<Eigen::Isometry3d> poses;
+  bool converged = false;
+  int iterations = 0;
+  double initial_cost = 0;
+  double final_cost = 0;
+};
+
+// Optimises `initial` (node poses in the map frame) under `edges`, with node 0 held fixed.
+GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
+                                  const std::vector<PoseGraphEdge>& edges, const GraphConfig& config = {});
+
+}  // namespace bathyslam

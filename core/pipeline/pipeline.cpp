@@ -1,0 +1,288 @@
+#include "core/pipeline/pipeline.h"
+
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include <omp.h>
+
+#include "core/sync/nav_interpolation.h"
+
+namespace bathyslam {
+namespace {
+
+struct Parameter {
+  double* value;
+  double min, max;
+  bool integer;
+};
+
+// The tunable parameters by name. Integers are held in a double mirror, see set_parameter.
+struct ParameterTable {
+  double pings_per_submap, voxel_x, voxel_y, voxel_z, k_adjacent, parallel_tol, min_overlap,
+      gicp_corr, gicp_iter, gicp_conv, gicp_nn, huber, graph_iter, cons_cell, cons_min,
+      gicp_sx, gicp_sy, gicp_sz, gicp_sr, gicp_sp, gicp_syaw, dr_sx, dr_sy, dr_sz, dr_sr, dr_sp,
+      dr_syaw, threads;
+
+  explicit ParameterTable(const PipelineConfig& c)
+      : pings_per_submap(c.submaps.pings_per_submap), voxel_x(c.voxel.leaf_x_m), voxel_y(c.voxel.leaf_y_m),
+        voxel_z(c.voxel.leaf_z_m), k_adjacent(c.candidates.k_adjacent_lines),
+        parallel_tol(c.candidates.parallel_tolerance_deg), min_overlap(c.candidates.min_overlap_fraction),
+        gicp_corr(c.gicp.max_correspondence_m), gicp_iter(c.gicp.max_iterations), gicp_conv(c.gicp.convergence),
+        gicp_nn(c.gicp.neighbours), huber(c.graph.huber_delta), graph_iter(c.graph.max_iterations),
+        cons_cell(c.consistency.cell_m), cons_min(c.consistency.min_soundings),
+        gicp_sx(c.gicp_sigma_translation_m.x()), gicp_sy(c.gicp_sigma_translation_m.y()),
+        gicp_sz(c.gicp_sigma_translation_m.z()), gicp_sr(c.gicp_sigma_rotation_rad.x()),
+        gicp_sp(c.gicp_sigma_rotation_rad.y()), gicp_syaw(c.gicp_sigma_rotation_rad.z()),
+        dr_sx(c.graph.dr_sigma_translation_m.x()), dr_sy(c.graph.dr_sigma_translation_m.y()),
+        dr_sz(c.graph.dr_sigma_translation_m.z()), dr_sr(c.graph.dr_sigma_rotation_rad.x()),
+        dr_sp(c.graph.dr_sigma_rotation_rad.y()), dr_syaw(c.graph.dr_sigma_rotation_rad.z()),
+        threads(c.threads) {}
+
+  std::map<std::string, Parameter> by_name() {
+    return {
+        {"submaps.pings_per_submap", {&pings_per_submap, 10, 10000, true}},
+        {"voxel.leaf_x_m", {&voxel_x, 0.01, 10, false}},
+        {"voxel.leaf_y_m", {&voxel_y, 0.01, 10, false}},
+        {"voxel.leaf_z_m", {&voxel_z, 0.01, 10, false}},
+        {"candidates.k_adjacent_lines", {&k_adjacent, 1, 100, true}},
+        {"candidates.parallel_tolerance_deg", {&parallel_tol, 0, 90, false}},
+        {"candidates.min_overlap_fraction", {&min_overlap, 0, 1, false}},
+        {"gicp.max_correspondence_m", {&gicp_corr, 0.01, 100, false}},
+        {"gicp.max_iterations", {&gicp_iter, 1, 10000, true}},
+        {"gicp.convergence", {&gicp_conv, 1e-12, 1, false}},
+        {"gicp.neighbours", {&gicp_nn, 3, 200, true}},
+        {"gicp.sigma_x_m", {&gicp_sx, 1e-4, 1e3, false}},
+        {"gicp.sigma_y_m", {&gicp_sy, 1e-4, 1e3, false}},
+        {"gicp.sigma_z_m", {&gicp_sz, 1e-4, 1e3, false}},
+        {"gicp.sigma_roll_rad", {&gicp_sr, 1e-6, 10, false}},
+        {"gicp.sigma_pitch_rad", {&gicp_sp, 1e-6, 10, false}},
+        {"gicp.sigma_yaw_rad", {&gicp_syaw, 1e-6, 10, false}},
+        {"graph.dr_sigma_x_m", {&dr_sx, 1e-4, 1e3, false}},
+        {"graph.dr_sigma_y_m", {&dr_sy, 1e-4, 1e3, false}},
+        {"graph.dr_sigma_z_m", {&dr_sz, 1e-4, 1e3, false}},
+        {"graph.dr_sigma_roll_rad", {&dr_sr, 1e-8, 10, false}},
+        {"graph.dr_sigma_pitch_rad", {&dr_sp, 1e-8, 10, false}},
+        {"graph.dr_sigma_yaw_rad", {&dr_syaw, 1e-8, 10, false}},
+        {"graph.huber_delta", {&huber, 1e-3, 1e3, false}},
+        {"graph.max_iterations", {&graph_iter, 1, 10000, true}},
+        {"eval.cell_m", {&cons_cell, 0.05, 100, false}},
+        {"eval.min_soundings", {&cons_min, 1, 1000, true}},
+        {"threads", {&threads, 0, 1024, true}},
+    };
+  }
+
+  void store(PipelineConfig& c) const {
+    c.submaps.pings_per_submap = static_cast<int>(pings_per_submap);
+    c.voxel = {static_cast<float>(voxel_x), static_cast<float>(voxel_y), static_cast<float>(voxel_z)};
+    c.candidates = {static_cast<int>(k_adjacent), parallel_tol, min_overlap};
+    c.gicp = {gicp_corr, static_cast<int>(gicp_iter), gicp_conv, static_cast<int>(gicp_nn)};
+    c.graph.dr_sigma_translation_m = {dr_sx, dr_sy, dr_sz};
+    c.graph.dr_sigma_rotation_rad = {dr_sr, dr_sp, dr_syaw};
+    c.graph.huber_delta = huber;
+    c.graph.max_iterations = static_cast<int>(graph_iter);
+    c.consistency.cell_m = cons_cell;
+    c.consistency.min_soundings = static_cast<int>(cons_min);
+    c.gicp_sigma_translation_m = {gicp_sx, gicp_sy, gicp_sz};
+    c.gicp_sigma_rotation_rad = {gicp_sr, gicp_sp, gicp_syaw};
+    c.threads = static_cast<int>(threads);
+  }
+};
+
+class StageClock {
+ public:
+  explicit StageClock(std::vector<StageTiming>& timings) : timings_(timings) {}
+  void done(const std::string& stage) {
+    const auto now = std::chrono::steady_clock::now();
+    timings_.push_back({stage, std::chrono::duration<double>(now - start_).count()});
+    start_ = now;
+  }
+
+ private:
+  std::vector<StageTiming>& timings_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+void check(const std::atomic<bool>* cancel) {
+  if (cancel != nullptr && cancel->load()) throw Cancelled();
+}
+
+// Registers every candidate pair in parallel; results land in pair order.
+std::vector<Constraint> register_candidates(const PipelineResult& r, const std::vector<CandidatePair>& pairs,
+                                            const std::vector<Cloud::Ptr>& clouds, const PipelineConfig& config,
+                                            const ProgressFn& progress, const std::atomic<bool>* cancel) {
+  std::vector<Constraint> constraints(pairs.size());
+  const Information6 uniform = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
+  const int threads = config.threads > 0 ? config.threads : static_cast<int>(std::thread::hardware_concurrency());
+  std::mutex progress_mutex;
+  std::size_t finished = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (cancel != nullptr && cancel->load()) continue;
+    const CandidatePair& pair = pairs[k];
+    const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
+    const Cloud::Ptr target = crop_to_overlap(*clouds[pair.target], *clouds[pair.source], guess.inverse(), 1.0);
+    const Cloud::Ptr source = crop_to_overlap(*clouds[pair.source], *clouds[pair.target], guess, 1.0);
+    const Registration reg = register_gicp(target, source, guess, config.gicp);
+    Constraint& c = constraints[k];
+    c.type = ConstraintType::kAdjacent;
+    c.from = pair.target;
+    c.to = pair.source;
+    c.measured = reg.source_to_target;
+    c.quality = reg.quality;
+    c.overlap_fraction = pair.overlap_fraction;
+    c.information = uniform;
+    // The baseline keeps every registration GICP reports as converged with some overlap.
+    c.accepted = reg.quality.converged && reg.quality.overlap_points > 0;
+    if (!reg.quality.converged) c.reason = "GICP did not converge";
+    else if (reg.quality.overlap_points == 0) c.reason = "no overlapping points";
+    if (progress) {
+      std::lock_guard lock(progress_mutex);
+      progress("register", static_cast<double>(++finished) / pairs.size());
+    }
+  }
+  check(cancel);
+  return constraints;
+}
+
+}  // namespace
+
+Configuration parse_configuration(const std::string& name) {
+  if (name == "odometry") return Configuration::kOdometry;
+  if (name == "gicp") return Configuration::kGicp;
+  throw std::invalid_argument("unknown configuration '" + name + "' (expected odometry or gicp)");
+}
+
+std::string to_string(Configuration c) { return c == Configuration::kOdometry ? "odometry" : "gicp"; }
+
+std::string to_string(ConstraintType t) { return t == ConstraintType::kOdometry ? "odometry" : "adjacent"; }
+
+void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
+  ParameterTable table(config);
+  auto params = table.by_name();
+  const auto it = params.find(name);
+  if (it == params.end()) throw std::invalid_argument("unknown parameter '" + name + "'");
+  double v = 0;
+  std::size_t used = 0;
+  try {
+    v = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const Parameter& p = it->second;
+  if (used != value.size() || !std::isfinite(v)) {
+    throw std::invalid_argument("parameter '" + name + "': '" + value + "' is not a number");
+  }
+  if (v < p.min || v > p.max || (p.integer && v != std::floor(v))) {
+    throw std::invalid_argument("parameter '" + name + "': " + value + " is outside [" +
+                                std::to_string(p.min) + ", " + std::to_string(p.max) + "]" +
+                                (p.integer ? " or not an integer" : ""));
+  }
+  *p.value = v;
+  table.store(config);
+}
+
+std::map<std::string, double> parameters(const PipelineConfig& config) {
+  ParameterTable table(config);
+  std::map<std::string, double> out;
+  for (const auto& [name, p] : table.by_name()) out[name] = *p.value;
+  return out;
+}
+
+PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
+                            const std::atomic<bool>* cancel) {
+  auto report = [&](std::string_view stage, double fraction) {
+    if (progress) progress(stage, fraction);
+  };
+  PipelineResult r;
+  r.config = config;
+  StageClock clock(r.timings);
+
+  report("submaps", 0);
+  r.submaps = build_submaps(survey, config.submaps);
+  for (const Submap& s : r.submaps.submaps) r.dr_poses.push_back(s.dr_pose);
+  clock.done("submaps");
+  check(cancel);
+
+  // Odometry edges: consecutive submaps, DR relative pose, Table 1's DR information.
+  const Information6 dr_information =
+      information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad);
+  for (std::size_t i = 1; i < r.dr_poses.size(); ++i) {
+    Constraint c;
+    c.from = static_cast<int>(i - 1);
+    c.to = static_cast<int>(i);
+    c.measured = r.dr_poses[i - 1].inverse() * r.dr_poses[i];
+    c.information = dr_information;
+    r.constraints.push_back(c);
+  }
+
+  if (config.configuration == Configuration::kGicp) {
+    report("filter", 0);
+    std::vector<Cloud::Ptr> clouds(r.submaps.submaps.size());
+#pragma omp parallel for schedule(dynamic, 4)
+    for (std::size_t i = 0; i < clouds.size(); ++i) clouds[i] = voxel_filter(r.submaps.submaps[i].points, config.voxel);
+    clock.done("filter");
+    check(cancel);
+
+    report("candidates", 0);
+    const std::vector<CandidatePair> pairs = adjacent_line_candidates(r.submaps, r.dr_poses, config.candidates);
+    clock.done("candidates");
+
+    report("register", 0);
+    for (Constraint& c : register_candidates(r, pairs, clouds, config, progress, cancel)) r.constraints.push_back(c);
+    clock.done("register");
+  }
+
+  report("graph", 0);
+  std::vector<PoseGraphEdge> edges;
+  for (const Constraint& c : r.constraints) {
+    if (c.accepted) edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry});
+  }
+  r.graph = optimize_pose_graph(r.dr_poses, edges, config.graph);
+  r.optimized_poses = r.graph.poses;
+  clock.done("graph");
+  check(cancel);
+
+  report("eval", 0);
+  r.dr_trajectory_errors = trajectory_errors(r.submaps, r.dr_poses);
+  r.trajectory_errors = trajectory_errors(r.submaps, r.optimized_poses);
+  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, config.consistency);
+  r.consistency = consistency_error(r.submaps, r.optimized_poses, config.consistency);
+  clock.done("eval");
+  report("done", 1);
+  return r;
+}
+
+std::vector<NavSample> corrected_navigation(const Survey& survey, const PipelineResult& r) {
+  const auto& submaps = r.submaps.submaps;
+  const LocalOrigin& origin = r.submaps.origin;
+  // Correction of each submap: optimized pose relative to its DR pose, in the map frame.
+  std::vector<Eigen::Isometry3d> corrections;
+  for (std::size_t i = 0; i < submaps.size(); ++i) corrections.push_back(r.optimized_poses[i] * r.dr_poses[i].inverse());
+  auto correction_at = [&](double t) -> Eigen::Isometry3d {
+    if (submaps.empty()) return Eigen::Isometry3d::Identity();
+    if (t <= submaps.front().time_mid) return corrections.front();
+    if (t >= submaps.back().time_mid) return corrections.back();
+    const auto next = std::lower_bound(submaps.begin(), submaps.end(), t,
+                                       [](const Submap& s, double time) { return s.time_mid < time; });
+    const std::size_t b = static_cast<std::size_t>(next - submaps.begin()), a = b - 1;
+    const double f = (t - submaps[a].time_mid) / (submaps[b].time_mid - submaps[a].time_mid);
+    Eigen::Isometry3d c = Eigen::Isometry3d::Identity();
+    c.linear() = Eigen::Quaterniond(corrections[a].rotation())
+                     .slerp(f, Eigen::Quaterniond(corrections[b].rotation()))
+                     .toRotationMatrix();
+    c.translation() = (1 - f) * corrections[a].translation() + f * corrections[b].translation();
+    return c;
+  };
+  std::vector<NavSample> out;
+  out.reserve(survey.nav.size());
+  for (const NavSample& s : survey.nav) {
+    NavSample corrected = nav_from_pose(correction_at(s.time) * vehicle_pose(s, origin), origin);
+    corrected.time = s.time;
+    out.push_back(corrected);
+  }
+  return out;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,90 @@
+#pragma once
+// pipeline: the stages of design.md run in order for one configuration, with progress reported
+// through a callback and cancellation checked between units of work.
+#include <atomic>
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/candidates/candidates.h"
+#include "core/eval/metrics.h"
+#include "core/filter/voxel_filter.h"
+#include "core/graph/pose_graph.h"
+#include "core/register/gicp.h"
+#include "core/submaps/submap.h"
+
+namespace bathyslam {
+
+enum class Configuration { kOdometry, kGicp };
+Configuration parse_configuration(const std::string& name);  // throws std::invalid_argument
+std::string to_string(Configuration configuration);
+
+struct PipelineConfig {
+  Configuration configuration = Configuration::kGicp;
+  SubmapConfig submaps;
+  VoxelConfig voxel;
+  CandidateConfig candidates;
+  GicpConfig gicp;
+  GraphConfig graph;
+  ConsistencyConfig consistency;
+  // `gicp`: every registration edge gets the same information, as in the paper's baseline.
+  Eigen::Vector3d gicp_sigma_translation_m{0.5, 0.5, 0.2};
+  Eigen::Vector3d gicp_sigma_rotation_rad{0.01, 0.01, 0.01};
+  int threads = 0;  // 0: all cores
+};
+
+// Sets one parameter by its name ("gicp.max_correspondence_m", ...); throws
+// std::invalid_argument naming the parameter when the name is unknown or the value out of range.
+void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value);
+// Every parameter by name with its current value.
+std::map<std::string, double> parameters(const PipelineConfig& config);
+
+enum class ConstraintType { kOdometry, kAdjacent };
+std::string to_string(ConstraintType type);
+
+struct Constraint {
+  ConstraintType type = ConstraintType::kOdometry;
+  int from = 0, to = 0;
+  Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();  // `to` in the frame of `from`
+  Information6 information = Information6::Identity();
+  RegistrationQuality quality;   // registrations only
+  double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time
+  bool accepted = true;
+  std::string reason;            // why a registration was rejected
+};
+
+struct StageTiming {
+  std::string stage;
+  double seconds = 0;
+};
+
+struct PipelineResult {
+  PipelineConfig config;
+  SubmapSet submaps;
+  std::vector<Eigen::Isometry3d> dr_poses;
+  std::vector<Eigen::Isometry3d> optimized_poses;
+  std::vector<Constraint> constraints;
+  GraphSolution graph;
+  std::vector<double> dr_trajectory_errors, trajectory_errors;  // per submap with a reference
+  ConsistencyReport dr_consistency, consistency;
+  std::vector<StageTiming> timings;
+};
+
+using ProgressFn = std::function<void(std::string_view stage, double fraction)>;
+
+class Cancelled : public std::runtime_error {
+ public:
+  Cancelled() : std::runtime_error("cancelled") {}
+};
+
+PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config,
+                            const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
+
+// The optimized navigation: every DR sample moved by its submaps' correction (interpolated
+// between submap middles), in the nav.csv columns.
+std::vector<NavSample> corrected_navigation(const Survey& survey, const PipelineResult& result);
+
+}  // namespace bathyslam

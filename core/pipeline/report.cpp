@@ -1,0 +1,120 @@
+#include "core/pipeline/report.h"
+
+#include <cstdio>
+#include <fstream>
+
+#include "core/eval/plots.h"
+
+namespace bathyslam {
+namespace {
+
+nlohmann::json stats_json(const ErrorStats& s) {
+  return {{"rmse", s.rmse}, {"mean", s.mean}, {"std", s.std}, {"p50", s.p50}, {"p95", s.p95},
+          {"p99", s.p99},   {"max", s.max},   {"count", s.count}};
+}
+
+nlohmann::json constraint_stats(const PipelineResult& r) {
+  nlohmann::json by_type = nlohmann::json::object();
+  for (const Constraint& c : r.constraints) {
+    nlohmann::json& t = by_type[to_string(c.type)];
+    if (t.is_null()) t = {{"candidates", 0}, {"accepted", 0}, {"rejected", 0}, {"rejection_reasons", nlohmann::json::object()}};
+    t["candidates"] = t["candidates"].get<int>() + 1;
+    if (c.accepted) {
+      t["accepted"] = t["accepted"].get<int>() + 1;
+    } else {
+      t["rejected"] = t["rejected"].get<int>() + 1;
+      nlohmann::json& reasons = t["rejection_reasons"];
+      reasons[c.reason] = reasons.value(c.reason, 0) + 1;
+    }
+  }
+  return by_type;
+}
+
+void write_file(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+}
+
+}  // namespace
+
+nlohmann::json report_json(const PipelineResult& r) {
+  nlohmann::json histogram = {{"bin_width_m", r.consistency.histogram.bin_width},
+                              {"counts", r.consistency.histogram.counts},
+                              {"dr_counts", r.dr_consistency.histogram.counts}};
+  nlohmann::json timings = nlohmann::json::object();
+  for (const StageTiming& t : r.timings) timings[t.stage] = t.seconds;
+  return {{"configuration", to_string(r.config.configuration)},
+          {"parameters", parameters(r.config)},
+          {"submaps", {{"count", r.submaps.submaps.size()},
+                       {"lines", r.submaps.lines.size()},
+                       {"pings_dropped_outside_navigation", r.submaps.pings_dropped}}},
+          {"constraints", constraint_stats(r)},
+          {"graph", {{"converged", r.graph.converged}, {"iterations", r.graph.iterations},
+                     {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost}}},
+          {"trajectory_error_m", {{"optimized", stats_json(error_stats(r.trajectory_errors))},
+                                  {"dead_reckoning", stats_json(error_stats(r.dr_trajectory_errors))},
+                                  {"per_pose", r.trajectory_errors}}},
+          {"consistency_error_m", {{"optimized", stats_json(r.consistency.stats)},
+                                   {"dead_reckoning", stats_json(r.dr_consistency.stats)},
+                                   {"histogram", histogram}}},
+          {"timings_s", timings}};
+}
+
+std::string report_summary(const PipelineResult& r) {
+  const ErrorStats t = error_stats(r.trajectory_errors), t0 = error_stats(r.dr_trajectory_errors);
+  const ErrorStats& c = r.consistency.stats;
+  const ErrorStats& c0 = r.dr_consistency.stats;
+  std::size_t registrations = 0, accepted = 0;
+  for (const Constraint& k : r.constraints) {
+    if (k.type == ConstraintType::kOdometry) continue;
+    ++registrations;
+    accepted += k.accepted ? 1 : 0;
+  }
+  char text[1024];
+  std::snprintf(text, sizeof text,
+                "configuration %s: %zu submaps on %zu lines, %zu/%zu registrations accepted\n"
+                "trajectory error   rmse %.2f m, mean %.2f m, std %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
+                "consistency error  rmse %.3f m, p95 %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
+                to_string(r.config.configuration).c_str(), r.submaps.submaps.size(), r.submaps.lines.size(),
+                accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, c.rmse, c.p95, c.p99, c.count,
+                c0.rmse);
+  return text;
+}
+
+void write_report_plots(const PipelineResult& r, const std::filesystem::path& dir) {
+  auto histogram_series = [](const Histogram& h, const std::string& label, uint8_t red, uint8_t green, uint8_t blue) {
+    Series s{label, {}, red, green, blue, true};
+    for (std::size_t i = 0; i < h.counts.size(); ++i) s.points.emplace_back(i * h.bin_width, static_cast<double>(h.counts[i]));
+    return s;
+  };
+  write_file(dir / "consistency_histogram.png",
+             plot_png({"Consistency error (" + to_string(r.config.configuration) + ")", "consistency error (m)",
+                       "cells"},
+                      {histogram_series(r.dr_consistency.histogram, "dead reckoning", 230, 120, 120),
+                       histogram_series(r.consistency.histogram, "optimized", 40, 90, 200)}));
+
+  auto per_pose = [](const std::vector<double>& errors, const std::string& label, uint8_t red, uint8_t green, uint8_t blue) {
+    Series s{label, {}, red, green, blue, false};
+    for (std::size_t i = 0; i < errors.size(); ++i) s.points.emplace_back(static_cast<double>(i), errors[i]);
+    return s;
+  };
+  write_file(dir / "trajectory_error.png",
+             plot_png({"Horizontal error against the reference", "submap (pose index)", "error (m)"},
+                      {per_pose(r.dr_trajectory_errors, "dead reckoning", 220, 60, 60),
+                       per_pose(r.trajectory_errors, "optimized", 40, 90, 200)}));
+
+  Series reference{"reference", {}, 40, 160, 40}, dr{"dead reckoning", {}, 220, 60, 60},
+      optimized{"optimized", {}, 40, 90, 200};
+  for (std::size_t i = 0; i < r.submaps.submaps.size(); ++i) {
+    const Submap& s = r.submaps.submaps[i];
+    if (s.reference_pose) reference.points.emplace_back(s.reference_pose->translation().head<2>());
+    dr.points.emplace_back(r.dr_poses[i].translation().head<2>());
+    optimized.points.emplace_back(r.optimized_poses[i].translation().head<2>());
+  }
+  write_file(dir / "trajectory.png",
+             plot_png({"Trajectory (submap poses)", "east of local origin (m)", "north of local origin (m)", true},
+                      {reference, dr, optimized}));
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,45 @@
+#pragma once
+// register (direct path): GICP between two submaps, initialised from dead reckoning, with the
+// quality measures that acceptance and the information matrices use.
+#include <cstddef>
+
+#include <Eigen/Geometry>
+
+#include "core/filter/voxel_filter.h"
+
+namespace bathyslam {
+
+struct GicpConfig {  // Table 1 (c)
+  double max_correspondence_m = 3.0;
+  int max_iterations = 300;
+  double convergence = 1e-3;  // transformation epsilon
+  int neighbours = 20;        // for the point covariances
+};
+
+struct RegistrationQuality {
+  bool converged = false;
+  double fitness = 0;            // PCL's fitness: mean squared distance over all source points in range
+  std::size_t overlap_points = 0;  // source points with a target point within max_correspondence
+  double overlap_mse_m2 = 0;     // mean squared distance over those points
+};
+
+struct Registration {
+  Eigen::Isometry3d source_to_target = Eigen::Isometry3d::Identity();
+  RegistrationQuality quality;
+};
+
+// Both clouds in their own (centred) submap frames; `guess` maps source into target.
+Registration register_gicp(const Cloud::ConstPtr& target, const Cloud::ConstPtr& source,
+                           const Eigen::Isometry3d& guess, const GicpConfig& config = {});
+
+// The points of `cloud` that fall inside the horizontal bounding box of `other` once moved by
+// `cloud_to_other`, widened by `margin_m`. Registering only the DR-predicted overlap keeps the
+// swath edges from pulling the clouds together in flat regions.
+Cloud::Ptr crop_to_overlap(const Cloud& cloud, const Cloud& other, const Eigen::Isometry3d& cloud_to_other,
+                           double margin_m);
+
+// Overlap of `source` (moved by `source_to_target`) with `target`.
+RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
+                                    const Eigen::Isometry3d& source_to_target, double max_distance_m);
+
+}  // namespace bathyslam

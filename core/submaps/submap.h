@@ -1,0 +1,41 @@
+#pragma once
+// Submaps (design.md pipeline: sync, georef, submaps): pings posed by the navigation interpolated
+// at their times, grouped N at a time; each submap's frame is the vehicle pose at its middle
+// ping, and its soundings are stored in that frame (centred, so floats keep millimetres).
+#include <optional>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/lines/survey_lines.h"
+#include "core/types/pose.h"
+#include "core/types/survey.h"
+
+namespace bathyslam {
+
+struct SubmapConfig {
+  int pings_per_submap = 100;  // Table 1 (a)
+};
+
+struct Submap {
+  int index = 0;
+  int line = -1;  // index into the survey's lines; -1 for a submap taken in a turn
+  double time_begin = 0, time_mid = 0, time_end = 0;
+  Eigen::Isometry3d dr_pose = Eigen::Isometry3d::Identity();  // submap frame -> map frame (DR)
+  std::optional<Eigen::Isometry3d> reference_pose;            // the same from reference_nav
+  std::vector<Eigen::Vector3f> points;                        // soundings, submap frame
+};
+
+struct SubmapSet {
+  LocalOrigin origin;              // map frame = projected CRS minus this
+  std::vector<SurveyLine> lines;
+  std::vector<Submap> submaps;
+  std::size_t pings_dropped = 0;   // outside the navigation's time span (sync)
+};
+
+// The map frame's origin for a survey: its first navigation sample, rounded to 100 m.
+LocalOrigin local_origin_of(const Survey& survey);
+
+SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config = {});
+
+}  // namespace bathyslam
