@@ -129,7 +129,10 @@ std::vector<Constraint> register_candidates(const PipelineResult& r, const std::
     c.type = ConstraintType::kAdjacent;
     c.from = pair.target;
     c.to = pair.source;
-    c.measured = reg.source_to_target;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const pcl::PointXYZ& p : *source) centroid += p.getVector3fMap().cast<double>();
+    if (!source->empty()) centroid /= static_cast<double>(source->size());
+    c.measured = keep_dr_roll_pitch(reg.source_to_target, guess, centroid);
     c.quality = reg.quality;
     c.overlap_fraction = pair.overlap_fraction;
     c.information = uniform;

@@ -23,6 +23,18 @@ Cloud::Ptr crop_to_overlap(const Cloud& cloud, const Cloud& other, const Eigen::
   return cropped;
 }
 
+Eigen::Isometry3d keep_dr_roll_pitch(const Eigen::Isometry3d& registered, const Eigen::Isometry3d& guess,
+                                     const Eigen::Vector3d& anchor) {
+  // The change GICP made to the guess's rotation, reduced to its turn about the target's
+  // vertical axis (z, down in a vehicle frame).
+  const Eigen::Matrix3d delta = registered.rotation() * guess.rotation().transpose();
+  const double yaw = std::atan2(delta(1, 0), delta(0, 0));
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * guess.rotation();
+  out.translation() = registered * anchor - out.linear() * anchor;
+  return out;
+}
+
 RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
                                     const Eigen::Isometry3d& source_to_target, double max_distance_m) {
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;

@@ -38,6 +38,14 @@ Registration register_gicp(const Cloud::ConstPtr& target, const Cloud::ConstPtr&
 Cloud::Ptr crop_to_overlap(const Cloud& cloud, const Cloud& other, const Eigen::Isometry3d& cloud_to_other,
                            double margin_m);
 
+// `registered` with its roll and pitch replaced by those of `guess` (dead reckoning measures
+// them far better than a strip of overlap does), re-anchored so that it still moves the
+// overlap's centroid (`anchor`, source frame) exactly where `registered` does. Without the
+// re-anchoring, a small roll error about the source's origin, 20 m from the overlap, would
+// become a decimetre of false heave.
+Eigen::Isometry3d keep_dr_roll_pitch(const Eigen::Isometry3d& registered, const Eigen::Isometry3d& guess,
+                                     const Eigen::Vector3d& anchor);
+
 // Overlap of `source` (moved by `source_to_target`) with `target`.
 RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
                                     const Eigen::Isometry3d& source_to_target, double max_distance_m);
