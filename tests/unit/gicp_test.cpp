@@ -73,3 +73,30 @@ TEST(Gicp, RecoversAKnownOffsetBetweenAdjacentLineSubmaps) {
 
 }  // namespace
 }  // namespace bathyslam
+
+namespace bathyslam {
+namespace {
+
+TEST(KeepDrRollPitch, KeepsGuessRollPitchAndMovesTheAnchorLikeTheRegistration) {
+  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
+  guess.linear() = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitX()))
+                       .toRotationMatrix();
+  guess.translation() = Eigen::Vector3d(1, 30, 0.5);
+  // The registration turned 0.02 rad about z and, wrongly, 0.015 rad in roll.
+  Eigen::Isometry3d registered = guess;
+  registered.linear() = (Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(0.015, Eigen::Vector3d::UnitX())).toRotationMatrix() *
+                        guess.rotation();
+  registered.translation() += Eigen::Vector3d(0.4, -0.2, 0.1);
+  const Eigen::Vector3d anchor(2, -15, 10);
+
+  const Eigen::Isometry3d kept = keep_dr_roll_pitch(registered, guess, anchor);
+  EXPECT_TRUE((kept * anchor).isApprox(registered * anchor, 1e-12));
+  const Eigen::Matrix3d delta = kept.rotation() * guess.rotation().transpose();
+  const Eigen::AngleAxisd turn(delta);
+  EXPECT_NEAR(turn.angle(), 0.02, 1e-3) << "keeps the registration's yaw";
+  EXPECT_NEAR(std::abs(turn.axis().z()), 1.0, 1e-9) << "and nothing but yaw";
+}
+
+}  // namespace
+}  // namespace bathyslam
