@@ -4,6 +4,7 @@
 #include <cmath>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 
 #include <omp.h>
 
@@ -12,83 +13,39 @@
 namespace bathyslam {
 namespace {
 
-struct Parameter {
-  double* value;
-  double min, max;
-  bool integer;
-};
-
-// The tunable parameters by name. Integers are held in a double mirror, see set_parameter.
-struct ParameterTable {
-  double pings_per_submap, voxel_x, voxel_y, voxel_z, k_adjacent, parallel_tol, min_overlap,
-      gicp_corr, gicp_iter, gicp_conv, gicp_nn, huber, graph_iter, cons_cell, cons_min,
-      gicp_sx, gicp_sy, gicp_sz, gicp_sr, gicp_sp, gicp_syaw, dr_sx, dr_sy, dr_sz, dr_sr, dr_sp,
-      dr_syaw, threads;
-
-  explicit ParameterTable(const PipelineConfig& c)
-      : pings_per_submap(c.submaps.pings_per_submap), voxel_x(c.voxel.leaf_x_m), voxel_y(c.voxel.leaf_y_m),
-        voxel_z(c.voxel.leaf_z_m), k_adjacent(c.candidates.k_adjacent_lines),
-        parallel_tol(c.candidates.parallel_tolerance_deg), min_overlap(c.candidates.min_overlap_fraction),
-        gicp_corr(c.gicp.max_correspondence_m), gicp_iter(c.gicp.max_iterations), gicp_conv(c.gicp.convergence),
-        gicp_nn(c.gicp.neighbours), huber(c.graph.huber_delta), graph_iter(c.graph.max_iterations),
-        cons_cell(c.consistency.cell_m), cons_min(c.consistency.min_soundings),
-        gicp_sx(c.gicp_sigma_translation_m.x()), gicp_sy(c.gicp_sigma_translation_m.y()),
-        gicp_sz(c.gicp_sigma_translation_m.z()), gicp_sr(c.gicp_sigma_rotation_rad.x()),
-        gicp_sp(c.gicp_sigma_rotation_rad.y()), gicp_syaw(c.gicp_sigma_rotation_rad.z()),
-        dr_sx(c.graph.dr_sigma_translation_m.x()), dr_sy(c.graph.dr_sigma_translation_m.y()),
-        dr_sz(c.graph.dr_sigma_translation_m.z()), dr_sr(c.graph.dr_sigma_rotation_rad.x()),
-        dr_sp(c.graph.dr_sigma_rotation_rad.y()), dr_syaw(c.graph.dr_sigma_rotation_rad.z()),
-        threads(c.threads) {}
-
-  std::map<std::string, Parameter> by_name() {
-    return {
-        {"submaps.pings_per_submap", {&pings_per_submap, 10, 10000, true}},
-        {"voxel.leaf_x_m", {&voxel_x, 0.01, 10, false}},
-        {"voxel.leaf_y_m", {&voxel_y, 0.01, 10, false}},
-        {"voxel.leaf_z_m", {&voxel_z, 0.01, 10, false}},
-        {"candidates.k_adjacent_lines", {&k_adjacent, 1, 100, true}},
-        {"candidates.parallel_tolerance_deg", {&parallel_tol, 0, 90, false}},
-        {"candidates.min_overlap_fraction", {&min_overlap, 0, 1, false}},
-        {"gicp.max_correspondence_m", {&gicp_corr, 0.01, 100, false}},
-        {"gicp.max_iterations", {&gicp_iter, 1, 10000, true}},
-        {"gicp.convergence", {&gicp_conv, 1e-12, 1, false}},
-        {"gicp.neighbours", {&gicp_nn, 3, 200, true}},
-        {"gicp.sigma_x_m", {&gicp_sx, 1e-4, 1e3, false}},
-        {"gicp.sigma_y_m", {&gicp_sy, 1e-4, 1e3, false}},
-        {"gicp.sigma_z_m", {&gicp_sz, 1e-4, 1e3, false}},
-        {"gicp.sigma_roll_rad", {&gicp_sr, 1e-6, 10, false}},
-        {"gicp.sigma_pitch_rad", {&gicp_sp, 1e-6, 10, false}},
-        {"gicp.sigma_yaw_rad", {&gicp_syaw, 1e-6, 10, false}},
-        {"graph.dr_sigma_x_m", {&dr_sx, 1e-4, 1e3, false}},
-        {"graph.dr_sigma_y_m", {&dr_sy, 1e-4, 1e3, false}},
-        {"graph.dr_sigma_z_m", {&dr_sz, 1e-4, 1e3, false}},
-        {"graph.dr_sigma_roll_rad", {&dr_sr, 1e-8, 10, false}},
-        {"graph.dr_sigma_pitch_rad", {&dr_sp, 1e-8, 10, false}},
-        {"graph.dr_sigma_yaw_rad", {&dr_syaw, 1e-8, 10, false}},
-        {"graph.huber_delta", {&huber, 1e-3, 1e3, false}},
-        {"graph.max_iterations", {&graph_iter, 1, 10000, true}},
-        {"eval.cell_m", {&cons_cell, 0.05, 100, false}},
-        {"eval.min_soundings", {&cons_min, 1, 1000, true}},
-        {"threads", {&threads, 0, 1024, true}},
-    };
-  }
-
-  void store(PipelineConfig& c) const {
-    c.submaps.pings_per_submap = static_cast<int>(pings_per_submap);
-    c.voxel = {static_cast<float>(voxel_x), static_cast<float>(voxel_y), static_cast<float>(voxel_z)};
-    c.candidates = {static_cast<int>(k_adjacent), parallel_tol, min_overlap};
-    c.gicp = {gicp_corr, static_cast<int>(gicp_iter), gicp_conv, static_cast<int>(gicp_nn)};
-    c.graph.dr_sigma_translation_m = {dr_sx, dr_sy, dr_sz};
-    c.graph.dr_sigma_rotation_rad = {dr_sr, dr_sp, dr_syaw};
-    c.graph.huber_delta = huber;
-    c.graph.max_iterations = static_cast<int>(graph_iter);
-    c.consistency.cell_m = cons_cell;
-    c.consistency.min_soundings = static_cast<int>(cons_min);
-    c.gicp_sigma_translation_m = {gicp_sx, gicp_sy, gicp_sz};
-    c.gicp_sigma_rotation_rad = {gicp_sr, gicp_sp, gicp_syaw};
-    c.threads = static_cast<int>(threads);
-  }
-};
+// Calls `visit(name, field, min, max)` for every tunable parameter, `field` being a reference to
+// the config's own member (double, float or int): one list serves reading and setting.
+template <typename Config, typename Visit>
+void visit_parameters(Config& c, Visit&& visit) {
+  visit("submaps.pings_per_submap", c.submaps.pings_per_submap, 10, 10000);
+  visit("voxel.leaf_x_m", c.voxel.leaf_x_m, 0.01, 10);
+  visit("voxel.leaf_y_m", c.voxel.leaf_y_m, 0.01, 10);
+  visit("voxel.leaf_z_m", c.voxel.leaf_z_m, 0.01, 10);
+  visit("candidates.k_adjacent_lines", c.candidates.k_adjacent_lines, 1, 100);
+  visit("candidates.parallel_tolerance_deg", c.candidates.parallel_tolerance_deg, 0, 90);
+  visit("candidates.min_overlap_fraction", c.candidates.min_overlap_fraction, 0, 1);
+  visit("gicp.max_correspondence_m", c.gicp.max_correspondence_m, 0.01, 100);
+  visit("gicp.max_iterations", c.gicp.max_iterations, 1, 10000);
+  visit("gicp.convergence", c.gicp.convergence, 1e-12, 1);
+  visit("gicp.neighbours", c.gicp.neighbours, 3, 200);
+  visit("gicp.sigma_x_m", c.gicp_sigma_translation_m.x(), 1e-4, 1e3);
+  visit("gicp.sigma_y_m", c.gicp_sigma_translation_m.y(), 1e-4, 1e3);
+  visit("gicp.sigma_z_m", c.gicp_sigma_translation_m.z(), 1e-4, 1e3);
+  visit("gicp.sigma_roll_rad", c.gicp_sigma_rotation_rad.x(), 1e-6, 10);
+  visit("gicp.sigma_pitch_rad", c.gicp_sigma_rotation_rad.y(), 1e-6, 10);
+  visit("gicp.sigma_yaw_rad", c.gicp_sigma_rotation_rad.z(), 1e-6, 10);
+  visit("graph.dr_sigma_x_m", c.graph.dr_sigma_translation_m.x(), 1e-4, 1e3);
+  visit("graph.dr_sigma_y_m", c.graph.dr_sigma_translation_m.y(), 1e-4, 1e3);
+  visit("graph.dr_sigma_z_m", c.graph.dr_sigma_translation_m.z(), 1e-4, 1e3);
+  visit("graph.dr_sigma_roll_rad", c.graph.dr_sigma_rotation_rad.x(), 1e-8, 10);
+  visit("graph.dr_sigma_pitch_rad", c.graph.dr_sigma_rotation_rad.y(), 1e-8, 10);
+  visit("graph.dr_sigma_yaw_rad", c.graph.dr_sigma_rotation_rad.z(), 1e-8, 10);
+  visit("graph.huber_delta", c.graph.huber_delta, 1e-3, 1e3);
+  visit("graph.max_iterations", c.graph.max_iterations, 1, 10000);
+  visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
+  visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
+  visit("threads", c.threads, 0, 1024);
+}
 
 class StageClock {
  public:
@@ -162,34 +119,37 @@ std::string to_string(Configuration c) { return c == Configuration::kOdometry ? 
 std::string to_string(ConstraintType t) { return t == ConstraintType::kOdometry ? "odometry" : "adjacent"; }
 
 void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
-  ParameterTable table(config);
-  auto params = table.by_name();
-  const auto it = params.find(name);
-  if (it == params.end()) throw std::invalid_argument("unknown parameter '" + name + "'");
-  double v = 0;
-  std::size_t used = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  const Parameter& p = it->second;
-  if (used != value.size() || !std::isfinite(v)) {
-    throw std::invalid_argument("parameter '" + name + "': '" + value + "' is not a number");
-  }
-  if (v < p.min || v > p.max || (p.integer && v != std::floor(v))) {
-    throw std::invalid_argument("parameter '" + name + "': " + value + " is outside [" +
-                                std::to_string(p.min) + ", " + std::to_string(p.max) + "]" +
-                                (p.integer ? " or not an integer" : ""));
-  }
-  *p.value = v;
-  table.store(config);
+  bool found = false;
+  visit_parameters(config, [&](std::string_view key, auto& field, double min, double max) {
+    if (key != name) return;
+    found = true;
+    using Field = std::remove_reference_t<decltype(field)>;
+    constexpr bool integer = std::is_integral_v<Field>;
+    double v = 0;
+    std::size_t used = 0;
+    try {
+      v = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != value.size() || !std::isfinite(v)) {
+      throw std::invalid_argument("parameter '" + name + "': '" + value + "' is not a number");
+    }
+    if (v < min || v > max || (integer && v != std::floor(v))) {
+      throw std::invalid_argument("parameter '" + name + "': " + value + " is outside [" +
+                                  std::to_string(min) + ", " + std::to_string(max) + "]" +
+                                  (integer ? " or not an integer" : ""));
+    }
+    field = static_cast<Field>(v);
+  });
+  if (!found) throw std::invalid_argument("unknown parameter '" + name + "'");
 }
 
 std::map<std::string, double> parameters(const PipelineConfig& config) {
-  ParameterTable table(config);
   std::map<std::string, double> out;
-  for (const auto& [name, p] : table.by_name()) out[name] = *p.value;
+  visit_parameters(config, [&](std::string_view key, const auto& field, double, double) {
+    out[std::string(key)] = static_cast<double>(field);
+  });
   return out;
 }
 
