@@ -42,16 +42,6 @@ NavSample with_pose(NavSample s, const Pose4& p) {
   return s;
 }
 
-std::vector<NavSample> nav_of(const std::vector<VehicleState>& states, double every_s) {
-  std::vector<NavSample> nav;
-  const auto stride = static_cast<std::size_t>(std::lround(every_s / (states[1].time - states[0].time)));
-  for (std::size_t i = 0; i < states.size(); i += stride) {
-    const VehicleState& v = states[i];
-    nav.push_back({v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg});
-  }
-  return nav;
-}
-
 double mean_paper_error(const std::vector<NavSample>& truth, double sigma_yaw) {
   PaperDrift drift;
   drift.sigma_yaw_rad = sigma_yaw;
@@ -67,7 +57,9 @@ double mean_paper_error(const std::vector<NavSample>& truth, double sigma_yaw) {
 
 double calibrated_paper_sigma_yaw() {
   static const double sigma = [] {
-    const auto truth = nav_of(drive(survey_pattern(Scenario::kLake), MotionConfig{}), 0.5);
+    const MotionConfig motion;
+    const auto stride = static_cast<std::size_t>(std::lround(0.5 / motion.step_s));  // 2 Hz is plenty
+    const auto truth = navigation_of(drive(survey_pattern(Scenario::kLake), motion), stride);
     // The error is nearly linear in sigma_yaw; two secant steps settle it.
     double s = 5e-4;
     for (int i = 0; i < 2; ++i) s *= kPaperMeanDrError_m / mean_paper_error(truth, s);

@@ -13,11 +13,6 @@ namespace {
 // logging starts before and stops after the sonar.
 constexpr double kNavLeadS = 1.0;
 
-NavSample nav_sample(const VehicleState& v, const SimulationConfig& c) {
-  return {v.time, v.x + c.origin_easting, v.y + c.origin_northing, v.depth_m,
-          v.roll_deg, v.pitch_deg, v.heading_deg};
-}
-
 std::size_t steps_per(double interval_s, double step_s) {
   const auto n = static_cast<std::size_t>(std::lround(interval_s / step_s));
   if (n == 0 || std::abs(n * step_s - interval_s) > 1e-9) {
@@ -59,10 +54,8 @@ Simulation simulate(const SimulationConfig& config) {
   const std::size_t nav_stride = steps_per(1.0 / config.nav_rate_hz, motion.step_s);
   const std::size_t ping_stride = steps_per(1.0 / config.sonar.ping_rate_hz, motion.step_s);
   const std::size_t lead = steps_per(kNavLeadS, motion.step_s);
-  std::vector<NavSample> truth;
-  for (std::size_t i = 0; i < states.size(); i += nav_stride) {
-    truth.push_back(nav_sample(states[i], config));
-  }
+  std::vector<NavSample> truth =
+      navigation_of(states, nav_stride, config.origin_easting, config.origin_northing);
   std::vector<std::size_t> ping_steps;
   for (std::size_t i = lead + 1; i + lead < states.size(); i += ping_stride) ping_steps.push_back(i);
 

@@ -74,6 +74,16 @@ std::vector<LineSpec> survey_pattern(Scenario scenario) {
   return lines;
 }
 
+std::vector<NavSample> navigation_of(const std::vector<VehicleState>& states, std::size_t stride,
+                                     double east, double north) {
+  std::vector<NavSample> nav;
+  for (std::size_t i = 0; i < states.size(); i += stride) {
+    const VehicleState& v = states[i];
+    nav.push_back({v.time, v.x + east, v.y + north, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg});
+  }
+  return nav;
+}
+
 Area pattern_area(const std::vector<LineSpec>& lines, double margin_m) {
   Area area{lines.front().start, lines.front().start};
   for (const LineSpec& l : lines) {

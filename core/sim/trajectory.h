@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "core/sim/terrain.h"
+#include "core/types/survey.h"
 
 namespace bathyslam::sim {
 
@@ -49,6 +50,10 @@ struct VehicleState {
 // Drives the pattern: each line straight, joined to the next by the shortest turn-straight-turn
 // path at the turn radius (a Dubins path), recording the state every step.
 std::vector<VehicleState> drive(const std::vector<LineSpec>& lines, const MotionConfig& config);
+
+// Every `stride`-th state as a navigation sample, shifted from the local frame by (east, north).
+std::vector<NavSample> navigation_of(const std::vector<VehicleState>& states, std::size_t stride,
+                                     double east = 0.0, double north = 0.0);
 
 // The area covered by the pattern's lines, widened by `margin_m`.
 Area pattern_area(const std::vector<LineSpec>& lines, double margin_m);

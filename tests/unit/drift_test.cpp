@@ -9,14 +9,8 @@ namespace bathyslam::sim {
 namespace {
 
 std::vector<NavSample> lake_truth(double every_s) {
-  const auto states = drive(survey_pattern(Scenario::kLake), MotionConfig{});
-  std::vector<NavSample> nav;
   const auto stride = static_cast<std::size_t>(std::lround(every_s / MotionConfig{}.step_s));
-  for (std::size_t i = 0; i < states.size(); i += stride) {
-    const VehicleState& v = states[i];
-    nav.push_back({v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg});
-  }
-  return nav;
+  return navigation_of(drive(survey_pattern(Scenario::kLake), MotionConfig{}), stride);
 }
 
 TEST(PaperDrift, MeanDrErrorOverLakeMatchesThePaper) {

@@ -8,13 +8,7 @@ namespace bathyslam {
 namespace {
 
 std::vector<NavSample> truth_of(sim::Scenario scenario) {
-  std::vector<NavSample> nav;
-  const auto states = sim::drive(sim::survey_pattern(scenario), sim::MotionConfig{});
-  for (std::size_t i = 0; i < states.size(); i += 4) {
-    const auto& v = states[i];
-    nav.push_back({v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg});
-  }
-  return nav;
+  return sim::navigation_of(sim::drive(sim::survey_pattern(scenario), sim::MotionConfig{}), 4);
 }
 
 double course_of(const sim::LineSpec& line) {
