@@ -11,13 +11,6 @@ namespace {
 
 constexpr double kCellM = 50.0;
 
-bool lines_are_adjacent(const std::vector<SurveyLine>& lines, int a, int b, const CandidateConfig& c) {
-  if (a < 0 || b < 0 || a == b || std::abs(a - b) > c.k_adjacent_lines) return false;
-  double d = std::fmod(std::abs(lines[a].course_deg - lines[b].course_deg), 180.0);
-  d = std::min(d, 180.0 - d);
-  return d <= c.parallel_tolerance_deg;
-}
-
 // Grid cells (keyed) covered by a footprint's bounding box.
 std::vector<int64_t> cells_of(const Footprint& f) {
   Eigen::Vector2d lo = f.corners[0], hi = f.corners[0];
@@ -35,6 +28,14 @@ std::vector<int64_t> cells_of(const Footprint& f) {
 }
 
 }  // namespace
+
+bool on_adjacent_lines(const SubmapSet& set, int a, int b, const CandidateConfig& config) {
+  const int la = set.submaps[a].line, lb = set.submaps[b].line;
+  if (la < 0 || lb < 0 || la == lb || std::abs(la - lb) > config.k_adjacent_lines) return false;
+  double d = std::fmod(std::abs(set.lines[la].course_deg - set.lines[lb].course_deg), 180.0);
+  d = std::min(d, 180.0 - d);
+  return d <= config.parallel_tolerance_deg;
+}
 
 Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose) {
   Eigen::Vector2f lo(0, 0), hi(0, 0);
@@ -89,7 +90,7 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
     std::sort(near.begin(), near.end());
     near.erase(std::unique(near.begin(), near.end()), near.end());
     for (int other : near) {
-      if (!lines_are_adjacent(set.lines, set.submaps[other].line, s.line, config)) continue;
+      if (!on_adjacent_lines(set, other, s.index, config)) continue;
       const double smaller = std::min(footprints[other].area_m2, footprints[s.index].area_m2);
       if (smaller <= 0) continue;
       const double fraction = overlap_area_m2(footprints[other], footprints[s.index]) / smaller;

@@ -29,6 +29,10 @@ struct CandidateConfig {
   double min_overlap_fraction = 0.1;
 };
 
+// Whether submaps `a` and `b` lie on distinct survey lines at most K apart that run parallel or
+// antiparallel (the pairs the `gicp` configuration registers).
+bool on_adjacent_lines(const SubmapSet& set, int a, int b, const CandidateConfig& config);
+
 struct CandidatePair {
   int target = 0;  // earlier submap
   int source = 0;  // later submap

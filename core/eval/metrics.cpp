@@ -90,4 +90,14 @@ std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Ei
   return errors;
 }
 
+std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int from, int to,
+                                                     const Eigen::Isometry3d& measured) {
+  const auto& a = set.submaps[from].reference_pose;
+  const auto& b = set.submaps[to].reference_pose;
+  if (!a || !b) return std::nullopt;
+  const Eigen::Isometry3d error = (a->inverse() * *b).inverse() * measured;
+  return RelativePoseError{error.translation().norm(), error.translation().head<2>().norm(),
+                           std::atan2(error.rotation()(1, 0), error.rotation()(0, 0)) * 180.0 / M_PI};
+}
+
 }  // namespace bathyslam

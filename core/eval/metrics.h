@@ -1,5 +1,6 @@
 #pragma once
 // eval: the quality report's numbers (design.md, "Evaluation").
+#include <optional>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -38,5 +39,15 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
 
 // Horizontal distance of each submap pose from its reference pose (the first pose is shared).
 std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);
+
+// How far a measured relative pose (`to` in the frame of `from`) is from the one the reference
+// poses give; nullopt without a reference.
+struct RelativePoseError {
+  double translation_m = 0;  // full 3D
+  double horizontal_m = 0;   // in the `from` frame's x-y plane
+  double yaw_deg = 0;        // signed
+};
+std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int from, int to,
+                                                     const Eigen::Isometry3d& measured);
 
 }  // namespace bathyslam

@@ -9,8 +9,10 @@ namespace {
 // by the square root of its information.
 class RelativePoseCost {
  public:
-  RelativePoseCost(const Eigen::Isometry3d& measured, const Information6& sqrt_information)
-      : p_measured_(measured.translation()),
+  RelativePoseCost(const Eigen::Isometry3d& measured, const Eigen::Vector3d& anchor,
+                   const Information6& sqrt_information)
+      : anchor_(anchor),
+        anchor_measured_(measured * anchor),
         q_measured_(Eigen::Quaterniond(measured.rotation()).normalized()),
         sqrt_information_(sqrt_information) {}
 
@@ -25,7 +27,7 @@ class RelativePoseCost {
     const Eigen::Quaternion<T> delta_q = q_measured_.template cast<T>() * q_ab.conjugate();
 
     Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
-    residuals.template head<3>() = p_ab - p_measured_.template cast<T>();
+    residuals.template head<3>() = q_ab * anchor_.template cast<T>() + p_ab - anchor_measured_.template cast<T>();
     residuals.template tail<3>() = T(2.0) * delta_q.vec();
     residuals.applyOnTheLeft(sqrt_information_.template cast<T>());
     return true;
@@ -34,11 +36,12 @@ class RelativePoseCost {
   static ceres::CostFunction* create(const PoseGraphEdge& edge) {
     const Information6 sqrt_information = edge.information.llt().matrixU();
     return new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
-        new RelativePoseCost(edge.measured, sqrt_information));
+        new RelativePoseCost(edge.measured, edge.anchor, sqrt_information));
   }
 
  private:
-  Eigen::Vector3d p_measured_;
+  Eigen::Vector3d anchor_;           // in `to`'s frame
+  Eigen::Vector3d anchor_measured_;  // where the measurement puts it in `from`'s frame
   Eigen::Quaterniond q_measured_;
   Information6 sqrt_information_;
 };

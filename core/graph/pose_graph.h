@@ -9,7 +9,7 @@ namespace bathyslam {
 using Information6 = Eigen::Matrix<double, 6, 6>;
 
 // A relative-pose constraint: `measured` is the pose of node `to` in the frame of node `from`.
-// Residual order: translation x, y, z (from's frame), then rotation about x, y, z (roll, pitch,
+// Residual order: translation x, y, z (from's frame, at `anchor`), then rotation about x, y, z (roll, pitch,
 // yaw for a vehicle frame).
 struct PoseGraphEdge {
   int from = 0;
@@ -17,6 +17,11 @@ struct PoseGraphEdge {
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();
   Information6 information = Information6::Identity();
   bool robust = false;  // Huber loss (registrations); odometry edges are trusted as Gaussian
+  // The point of `to`'s frame (its own coordinates) where the translation is compared: a
+  // registration pins down where the overlap lands far better than where `to`'s origin, tens of
+  // metres away, lands; comparing at the overlap keeps a loose yaw from posing as a translation.
+  // Zero compares origins.
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
 };
 
 // Diagonal information from standard deviations (metres, radians).

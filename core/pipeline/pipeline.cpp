@@ -28,6 +28,9 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("gicp.max_iterations", c.gicp.max_iterations, 1, 10000);
   visit("gicp.convergence", c.gicp.convergence, 1e-12, 1);
   visit("gicp.neighbours", c.gicp.neighbours, 3, 200);
+  visit("gicp.refine_correspondence_m", c.gicp.refine_correspondence_m, 0, 100);
+  visit("gicp.refine_convergence", c.gicp.refine_convergence, 1e-12, 1);
+  visit("gicp.about_centroid", c.gicp.about_centroid, 0, 1);
   visit("gicp.sigma_x_m", c.gicp_sigma_translation_m.x(), 1e-4, 1e3);
   visit("gicp.sigma_y_m", c.gicp_sigma_translation_m.y(), 1e-4, 1e3);
   visit("gicp.sigma_z_m", c.gicp_sigma_translation_m.z(), 1e-4, 1e3);
@@ -90,6 +93,7 @@ std::vector<Constraint> register_candidates(const PipelineResult& r, const std::
     for (const pcl::PointXYZ& p : *source) centroid += p.getVector3fMap().cast<double>();
     if (!source->empty()) centroid /= static_cast<double>(source->size());
     c.measured = keep_dr_roll_pitch(reg.source_to_target, guess, centroid);
+    c.anchor = centroid;
     c.quality = reg.quality;
     c.overlap_fraction = pair.overlap_fraction;
     c.information = uniform;
@@ -200,7 +204,9 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   report("graph", 0);
   std::vector<PoseGraphEdge> edges;
   for (const Constraint& c : r.constraints) {
-    if (c.accepted) edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry});
+    if (c.accepted) {
+      edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor});
+    }
   }
   r.graph = optimize_pose_graph(r.dr_poses, edges, config.graph);
   r.optimized_poses = r.graph.poses;

@@ -30,6 +30,30 @@ nlohmann::json constraint_stats(const PipelineResult& r) {
   return by_type;
 }
 
+// Every registration with its quality, and its error against the reference where there is one.
+nlohmann::json registrations_json(const PipelineResult& r) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const Constraint& c : r.constraints) {
+    if (c.type == ConstraintType::kOdometry) continue;
+    nlohmann::json j = {{"type", to_string(c.type)},
+                        {"from", c.from},
+                        {"to", c.to},
+                        {"overlap_fraction", c.overlap_fraction},
+                        {"converged", c.quality.converged},
+                        {"fitness", c.quality.fitness},
+                        {"overlap_points", c.quality.overlap_points},
+                        {"overlap_mse_m2", c.quality.overlap_mse_m2},
+                        {"accepted", c.accepted},
+                        {"reason", c.reason}};
+    if (const auto e = relative_pose_error(r.submaps, c.from, c.to, c.measured)) {
+      j["error_vs_reference"] = {{"translation_m", e->translation_m}, {"horizontal_m", e->horizontal_m},
+                                 {"yaw_deg", e->yaw_deg}};
+    }
+    list.push_back(std::move(j));
+  }
+  return list;
+}
+
 void write_file(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
@@ -50,6 +74,7 @@ nlohmann::json report_json(const PipelineResult& r) {
                        {"lines", r.submaps.lines.size()},
                        {"pings_dropped_outside_navigation", r.submaps.pings_dropped}}},
           {"constraints", constraint_stats(r)},
+          {"registrations", registrations_json(r)},
           {"graph", {{"converged", r.graph.converged}, {"iterations", r.graph.iterations},
                      {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost}}},
           {"trajectory_error_m", {{"optimized", stats_json(error_stats(r.trajectory_errors))},

@@ -54,28 +54,75 @@ RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
     }
   }
   q.overlap_mse_m2 = q.overlap_points > 0 ? sum / q.overlap_points : 0.0;
+  q.fitness = source.empty() ? 0.0 : static_cast<double>(q.overlap_points) / static_cast<double>(source.size());
   return q;
 }
 
-Registration register_gicp(const Cloud::ConstPtr& target, const Cloud::ConstPtr& source,
-                           const Eigen::Isometry3d& guess, const GicpConfig& config) {
+namespace {
+
+Eigen::Vector3f centroid(const Cloud& cloud) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const pcl::PointXYZ& p : cloud) sum += p.getVector3fMap().cast<double>();
+  return cloud.empty() ? Eigen::Vector3f::Zero() : Eigen::Vector3f((sum / static_cast<double>(cloud.size())).cast<float>());
+}
+
+Cloud::Ptr shifted(const Cloud& cloud, const Eigen::Vector3f& by) {
+  auto out = std::make_shared<Cloud>(cloud);
+  for (pcl::PointXYZ& p : *out) p.getVector3fMap() += by;
+  return out;
+}
+
+struct GicpPass {
+  Eigen::Matrix4f transform;
+  bool converged = false;
+};
+
+GicpPass gicp_pass(const Cloud::ConstPtr& target, const Cloud::ConstPtr& source, const Eigen::Matrix4f& guess,
+                   double max_correspondence_m, double convergence, const GicpConfig& config) {
   pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> gicp;
   gicp.setInputTarget(target);
   gicp.setInputSource(source);
-  gicp.setMaxCorrespondenceDistance(config.max_correspondence_m);
+  gicp.setMaxCorrespondenceDistance(max_correspondence_m);
   gicp.setMaximumIterations(config.max_iterations);
-  gicp.setTransformationEpsilon(config.convergence);
+  gicp.setTransformationEpsilon(convergence);
   gicp.setCorrespondenceRandomness(config.neighbours);
   Cloud aligned;
-  gicp.align(aligned, guess.matrix().cast<float>());
+  gicp.align(aligned, guess);
+  return {gicp.getFinalTransformation(), gicp.hasConverged()};
+}
 
+}  // namespace
+
+Registration register_gicp(const Cloud::ConstPtr& target, const Cloud::ConstPtr& source,
+                           const Eigen::Isometry3d& guess, const GicpConfig& config) {
+  // GICP's rotation is about the cloud frame's origin, which sits at the middle ping, tens of
+  // metres from an adjacent line's overlap: yaw and translation are then nearly the same motion
+  // and the solver stalls short of the minimum. Registering about the clouds' centroids
+  // decouples them.
+  const Eigen::Vector3f target_centre = config.about_centroid ? centroid(*target) : Eigen::Vector3f::Zero();
+  const Eigen::Vector3f source_centre = config.about_centroid ? centroid(*source) : Eigen::Vector3f::Zero();
+  const Eigen::Isometry3d to_target_centre(Eigen::Translation3d(-target_centre.cast<double>()));
+  const Eigen::Isometry3d from_source_centre(Eigen::Translation3d(source_centre.cast<double>()));
+  const Cloud::Ptr centred_target = shifted(*target, -target_centre);
+  const Cloud::Ptr centred_source = shifted(*source, -source_centre);
+  const Eigen::Isometry3d centred_guess = to_target_centre * guess * from_source_centre;
+
+  GicpPass pass = gicp_pass(centred_target, centred_source, centred_guess.matrix().cast<float>(),
+                            config.max_correspondence_m, config.convergence, config);
+  if (config.refine_correspondence_m > 0) {
+    const GicpPass refined = gicp_pass(centred_target, centred_source, pass.transform,
+                                       config.refine_correspondence_m, config.refine_convergence, config);
+    pass = {refined.transform, pass.converged && refined.converged};
+  }
+  Eigen::Isometry3d centred_result;
+  centred_result.matrix() = pass.transform.cast<double>();
+  const Eigen::Isometry3d result = to_target_centre.inverse() * centred_result * from_source_centre.inverse();
   Registration r;
-  r.source_to_target.matrix() = gicp.getFinalTransformation().cast<double>();
+  r.source_to_target = result;
   // Re-orthonormalise: the float transform drifts from a rotation by ~1e-7.
   r.source_to_target.linear() = Eigen::Quaterniond(r.source_to_target.rotation()).normalized().toRotationMatrix();
   r.quality = overlap_quality(*target, *source, r.source_to_target, config.max_correspondence_m);
-  r.quality.converged = gicp.hasConverged();
-  r.quality.fitness = gicp.getFitnessScore(config.max_correspondence_m);
+  r.quality.converged = pass.converged;
   return r;
 }
 

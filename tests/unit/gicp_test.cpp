@@ -3,22 +3,13 @@
 #include <gtest/gtest.h>
 
 #include "core/candidates/candidates.h"
-#include "core/sim/simulator.h"
-#include "core/submaps/submap.h"
+#include "tests/unit/true_submaps.h"
 
 namespace bathyslam {
 namespace {
 
-// Submaps of the small scenario placed by the true navigation: any pair's true relative pose
-// is then the one its poses give.
 const SubmapSet& true_submaps() {
-  static const SubmapSet set = [] {
-    sim::SimulationConfig config;
-    config.seed = 4;
-    Survey survey = sim::simulate(config).survey;
-    survey.nav = *survey.reference_nav;
-    return build_submaps(survey);
-  }();
+  static const SubmapSet set = true_small_submaps(4);
   return set;
 }
 
@@ -26,8 +17,7 @@ double angle_deg(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.rotati
 
 TEST(Gicp, RecoversAKnownOffsetBetweenAdjacentLineSubmaps) {
   const SubmapSet& set = true_submaps();
-  std::vector<Eigen::Isometry3d> poses;
-  for (const Submap& s : set.submaps) poses.push_back(s.dr_pose);
+  const std::vector<Eigen::Isometry3d> poses = poses_of(set);
   const auto pairs = adjacent_line_candidates(set, poses);
   ASSERT_FALSE(pairs.empty());
   // The well-overlapping pair on the roughest ground: GICP cannot see a horizontal offset on a
@@ -61,14 +51,23 @@ TEST(Gicp, RecoversAKnownOffsetBetweenAdjacentLineSubmaps) {
   const Cloud::Ptr source_all = voxel_filter(set.submaps[pair.source].points);
   const Cloud::Ptr target = crop_to_overlap(*target_all, *source_all, guess.inverse(), 1.0);
   const Cloud::Ptr source = crop_to_overlap(*source_all, *target_all, guess, 1.0);
-  const Registration r = register_gicp(target, source, guess);
+  // Table 1's single pass lands near the minimum but stops short of it.
+  const Registration table1 = register_gicp(target, source, guess);
+  const Eigen::Isometry3d table1_error = truth.inverse() * table1.source_to_target;
+  EXPECT_TRUE(table1.quality.converged);
+  EXPECT_LT(table1_error.translation().norm(), 0.3) << "translation error " << table1_error.translation().transpose();
+  EXPECT_LT(angle_deg(table1_error), 1.0);
+  EXPECT_GT(table1.quality.overlap_points, 500u);
+
+  // About the centroids with a refining pass it reaches the issue's 0.1 m and 0.3 degrees.
+  GicpConfig large_offset;
+  large_offset.about_centroid = 1;
+  large_offset.refine_correspondence_m = 1.0;
+  const Registration r = register_gicp(target, source, guess, large_offset);
   const Eigen::Isometry3d error = truth.inverse() * r.source_to_target;
   EXPECT_TRUE(r.quality.converged);
-  // The issue's target is 0.1 m and 0.3 degrees; PCL's GICP with Table 1's parameters lands
-  // at about 0.21 m and 0.78 degrees here (see the issue note). This asserts what it achieves.
-  EXPECT_LT(error.translation().norm(), 0.3) << "translation error " << error.translation().transpose();
-  EXPECT_LT(angle_deg(error), 1.0);
-  EXPECT_GT(r.quality.overlap_points, 500u);
+  EXPECT_LT(error.translation().norm(), 0.1) << "translation error " << error.translation().transpose();
+  EXPECT_LT(angle_deg(error), 0.3);
 }
 
 }  // namespace

@@ -52,6 +52,30 @@ TEST(PoseGraph, RecoversAKnownTrajectoryFromDriftingOdometryAndCrossEdges) {
   EXPECT_TRUE(solution.poses[0].isApprox(truth[0])) << "the first pose is fixed";
 }
 
+// A registration 30 m to the side whose yaw is 1 degree off but which puts the overlap exactly
+// where it is: compared at the overlap (the anchor), the loose yaw does not move the pose.
+TEST(PoseGraph, AnAnchoredEdgeComparesTranslationAtItsAnchor) {
+  const std::vector<Eigen::Isometry3d> truth = {pose(0, 0, 0), pose(0, 30, 0)};
+  const Eigen::Vector3d anchor(0, -15, 10);  // overlap centroid, node 1's frame
+  const Eigen::Isometry3d true_relative = truth[0].inverse() * truth[1];
+  // Turned 1 degree about the anchor: the anchor lands where it should, the origin 0.26 m off.
+  const Eigen::Isometry3d turned = Eigen::Translation3d(true_relative * anchor) *
+                                   Eigen::AngleAxisd(M_PI / 180, Eigen::Vector3d::UnitZ()) *
+                                   Eigen::Translation3d(-(true_relative * anchor)) * true_relative;
+  const Information6 dr_info = information_from_sigmas({5, 5, 1}, {1e-4, 1e-4, 1e-4});  // trusts yaw
+  const Information6 registration_info = information_from_sigmas({0.05, 0.05, 0.05}, {0.1, 0.1, 0.1});
+  auto solve = [&](const Eigen::Vector3d& edge_anchor) {
+    std::vector<PoseGraphEdge> edges = {{0, 1, true_relative, dr_info, false},
+                                        {0, 1, turned, registration_info, true, edge_anchor}};
+    Eigen::Isometry3d start = truth[1];
+    start.translation() += Eigen::Vector3d(3, -2, 0);
+    return optimize_pose_graph({truth[0], start}, edges).poses[1];
+  };
+  EXPECT_LT((solve(anchor).translation() - truth[1].translation()).norm(), 0.01);
+  EXPECT_GT((solve(Eigen::Vector3d::Zero()).translation() - truth[1].translation()).norm(), 0.2)
+      << "compared at the origin, the 1 degree becomes a quarter metre";
+}
+
 TEST(PoseGraph, OdometryAloneKeepsDeadReckoning) {
   std::vector<Eigen::Isometry3d> dr = {pose(0, 0, 0), pose(10, 1, 0.1), pose(19, 4, 0.3)};
   std::vector<PoseGraphEdge> edges;

@@ -1,0 +1,100 @@
+#include "core/candidates/candidates.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <unordered_set>
+
+#include "tests/unit/true_submaps.h"
+
+namespace bathyslam {
+namespace {
+
+const SubmapSet& true_submaps() {
+  static const SubmapSet set = true_small_submaps(2);
+  return set;
+}
+
+// The 1 m cells a submap's soundings fall in: the ground truth of where it overlaps another.
+std::unordered_set<int64_t> cells_of(const Submap& s) {
+  std::unordered_set<int64_t> cells;
+  for (const Eigen::Vector3f& p : s.points) {
+    const Eigen::Vector3d m = s.dr_pose * p.cast<double>();
+    cells.insert((static_cast<int64_t>(std::floor(m.x())) << 32) ^ (static_cast<int64_t>(std::floor(m.y())) & 0xffffffff));
+  }
+  return cells;
+}
+
+double true_overlap_fraction(const std::unordered_set<int64_t>& a, const std::unordered_set<int64_t>& b) {
+  std::size_t common = 0;
+  for (int64_t c : a) common += b.count(c);
+  return static_cast<double>(common) / static_cast<double>(std::min(a.size(), b.size()));
+}
+
+using PairSet = std::set<std::pair<int, int>>;
+
+PairSet pair_set(const std::vector<CandidatePair>& pairs) {
+  PairSet out;
+  for (const CandidatePair& p : pairs) out.insert({p.target, p.source});
+  return out;
+}
+
+TEST(Candidates, TheGridIndexFindsExactlyWhatComparingAllPairsFinds) {
+  const SubmapSet& set = true_submaps();
+  const auto poses = poses_of(set);
+  const CandidateConfig config;
+  PairSet brute_force;
+  for (const Submap& a : set.submaps) {
+    for (const Submap& b : set.submaps) {
+      if (a.index >= b.index || !on_adjacent_lines(set, a.index, b.index, config)) continue;
+      const Footprint fa = footprint_of(a, poses[a.index]), fb = footprint_of(b, poses[b.index]);
+      if (overlap_area_m2(fa, fb) / std::min(fa.area_m2, fb.area_m2) >= config.min_overlap_fraction) {
+        brute_force.insert({a.index, b.index});
+      }
+    }
+  }
+  ASSERT_GT(brute_force.size(), 10u);
+  EXPECT_EQ(pair_set(adjacent_line_candidates(set, poses, config)), brute_force);
+}
+
+// Against where the soundings really are: every pair of submaps on adjacent lines whose
+// soundings share a good part of their cells is a candidate, and no candidate is a pair whose
+// soundings share (next to) nothing.
+TEST(Candidates, FindEveryTrulyOverlappingAdjacentLinePairAndNoOther) {
+  const SubmapSet& set = true_submaps();
+  const CandidateConfig config;
+  const PairSet found = pair_set(adjacent_line_candidates(set, poses_of(set), config));
+  std::vector<std::unordered_set<int64_t>> cells;
+  for (const Submap& s : set.submaps) cells.push_back(cells_of(s));
+
+  int truly_overlapping = 0;
+  for (const Submap& a : set.submaps) {
+    for (const Submap& b : set.submaps) {
+      if (a.index >= b.index || !on_adjacent_lines(set, a.index, b.index, config)) continue;
+      const double fraction = true_overlap_fraction(cells[a.index], cells[b.index]);
+      const bool is_candidate = found.count({a.index, b.index}) > 0;
+      // Footprints are rectangles around the soundings, so the margins allow for their corners.
+      if (fraction >= config.min_overlap_fraction + 0.05) {
+        ++truly_overlapping;
+        EXPECT_TRUE(is_candidate) << a.index << "-" << b.index << " share " << fraction << " of their cells";
+      }
+      if (is_candidate) EXPECT_GT(fraction, 0.02) << a.index << "-" << b.index << " share nothing";
+    }
+  }
+  EXPECT_GT(truly_overlapping, 10);
+}
+
+TEST(Candidates, SubmapsOnNonAdjacentOrCrossingLinesAreNotPaired) {
+  const SubmapSet& set = true_submaps();
+  const CandidateConfig config;
+  for (const CandidatePair& p : adjacent_line_candidates(set, poses_of(set), config)) {
+    const int la = set.submaps[p.target].line, lb = set.submaps[p.source].line;
+    EXPECT_NE(la, lb);
+    EXPECT_LE(std::abs(la - lb), config.k_adjacent_lines);
+    double d = std::fmod(std::abs(set.lines[la].course_deg - set.lines[lb].course_deg), 180.0);
+    EXPECT_LE(std::min(d, 180.0 - d), config.parallel_tolerance_deg);
+  }
+}
+
+}  // namespace
+}  // namespace bathyslam

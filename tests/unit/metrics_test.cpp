@@ -1,0 +1,69 @@
+#include "core/eval/metrics.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/true_submaps.h"
+
+namespace bathyslam {
+namespace {
+
+// A submap of a flat patch: soundings every 0.25 m over `width` x `length` metres at `z`.
+Submap flat_patch(int index, int line, double x0, double y0, double width, double length, float z) {
+  Submap s;
+  s.index = index;
+  s.line = line;
+  s.dr_pose.translation() = Eigen::Vector3d(x0, y0, 0);
+  for (double x = 0.125; x < width; x += 0.25) {
+    for (double y = 0.125; y < length; y += 0.25) s.points.emplace_back(x, y, z);
+  }
+  return s;
+}
+
+// Line 0 covers x in [0, 20), line 1 covers x in [10, 30) half a metre deeper: they share
+// 10 x 20 cells of 1 m.
+SubmapSet two_lines_half_a_metre_apart() {
+  SubmapSet set;
+  set.lines.resize(2);
+  set.submaps.push_back(flat_patch(0, 0, 0, 0, 20, 20, -10.0f));
+  set.submaps.push_back(flat_patch(1, 1, 10, 0, 20, 20, -10.5f));
+  return set;
+}
+
+TEST(Consistency, TwoLinesOffsetByHalfAMetreVerticallyGiveHalfAMetre) {
+  const SubmapSet set = two_lines_half_a_metre_apart();
+  const std::vector<Eigen::Isometry3d> poses = poses_of(set);
+
+  const ConsistencyReport report = consistency_error(set, poses);
+  EXPECT_EQ(report.stats.count, 200u);
+  EXPECT_NEAR(report.stats.rmse, 0.5, 1e-5);
+  EXPECT_NEAR(report.stats.p99, 0.5, 1e-5);
+  EXPECT_NEAR(report.stats.max, 0.5, 1e-5);
+  // 0.5 m in bins of 0.02 m.
+  EXPECT_EQ(report.histogram.counts[25], 200u);
+}
+
+TEST(Consistency, OneLineAloneHasNothingToCompareAndTurnsDoNotCount) {
+  SubmapSet set;
+  set.lines.resize(1);
+  set.submaps.push_back(flat_patch(0, 0, 0, 0, 20, 20, -10.0f));
+  set.submaps.push_back(flat_patch(1, -1, 0, 0, 20, 20, -12.0f));  // a turn over the same ground
+  EXPECT_EQ(consistency_error(set, poses_of(set)).stats.count, 0u);
+}
+
+TEST(Consistency, CorrectedPosesRemoveTheOffset) {
+  const SubmapSet set = two_lines_half_a_metre_apart();
+  std::vector<Eigen::Isometry3d> poses = poses_of(set);
+  poses[1].translation().z() += 0.5;
+  EXPECT_NEAR(consistency_error(set, poses).stats.rmse, 0.0, 1e-5);
+}
+
+TEST(ErrorStats, KnownSeries) {
+  const ErrorStats s = error_stats({3, 4, 0, 0});  // unordered on purpose
+  EXPECT_DOUBLE_EQ(s.mean, 1.75);
+  EXPECT_DOUBLE_EQ(s.rmse, 2.5);
+  EXPECT_DOUBLE_EQ(s.max, 4);
+  EXPECT_NEAR(s.std, std::sqrt(6.25 - 1.75 * 1.75), 1e-12);
+}
+
+}  // namespace
+}  // namespace bathyslam
