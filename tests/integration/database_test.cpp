@@ -1,5 +1,9 @@
 // The libpq layer itself: parameters, errors, transactions, and the pool's reconnect.
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
+#include <functional>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -85,6 +89,39 @@ TEST(Database, PoolReconnectsAfterItsBackendIsKilled) {
   auto connection = pool.acquire();
   std::int64_t new_pid = connection->exec("SELECT pg_backend_pid()").int64(0, 0);
   EXPECT_NE(new_pid, pid);
+}
+
+TEST(Database, PoolReconnectsAfterTheServerRestarts) {
+  // A cluster of its own: restarting the shared one would break the tests running beside this.
+  const std::string script = BATHYSLAM_PG_SH;
+  const std::string dir = testing::required_env("BATHYSLAM_TEST_PG") + "-restart-" + std::to_string(getpid());
+  auto pg = [&](const std::string& command) {
+    return std::system(("bash " + script + " " + command + " " + dir + " > /dev/null").c_str());
+  };
+  ASSERT_EQ(pg("start"), 0);
+  struct Destroy {
+    std::function<int(const std::string&)> pg;
+    ~Destroy() { pg("destroy"); }
+  } destroy{pg};
+  ConnectionPool pool(testing::socket_conninfo(dir), 2);
+  {
+    auto a = pool.acquire();
+    auto b = pool.acquire();  // two connections now idle in the pool when the server goes
+    a->exec("SELECT 1");
+    b->exec("SELECT 1");
+  }
+  ASSERT_EQ(pg("stop"), 0);
+  try {
+    pool.acquire()->exec("SELECT 1");
+    FAIL() << "a query while the server is down";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "08006") << error.what();
+  }
+  ASSERT_EQ(pg("start"), 0);
+  auto a = pool.acquire();
+  auto b = pool.acquire();
+  EXPECT_EQ(a->exec("SELECT 41 + 1").int64(0, 0), 42);
+  EXPECT_EQ(b->exec("SELECT 41 + 1").int64(0, 0), 42);
 }
 
 TEST(Database, PoolLendsEachConnectionToOneBorrowerAtATime) {

@@ -24,13 +24,21 @@ std::string quoted_identifier(storage::Connection& connection, const std::string
 
 }  // namespace
 
-std::string cluster_conninfo(const std::string& database) {
-  const char* dir = std::getenv("BATHYSLAM_TEST_PG");
-  if (!dir || !*dir)
-    throw std::runtime_error("BATHYSLAM_TEST_PG is not set: run these tests through ctest, which starts the cluster");
+std::string required_env(const char* name) {
+  const char* value = std::getenv(name);
+  if (!value || !*value)
+    throw std::runtime_error(std::string(name) + " is not set: run these tests through ctest, which starts the cluster");
+  return value;
+}
+
+std::string socket_conninfo(const std::string& cluster_dir, const std::string& database) {
   // The socket directory through any symlink: socket paths must stay short.
-  const std::string socket_dir = (std::filesystem::canonical(dir) / "run").string();
+  const std::string socket_dir = (std::filesystem::canonical(cluster_dir) / "run").string();
   return "host=" + socket_dir + " user=postgres dbname=" + database;
+}
+
+std::string cluster_conninfo(const std::string& database) {
+  return socket_conninfo(required_env("BATHYSLAM_TEST_PG"), database);
 }
 
 FreshDatabase::FreshDatabase(bool migrated) {

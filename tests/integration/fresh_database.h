@@ -10,6 +10,10 @@ namespace bathyslam::testing {
 // The cluster's admin connection string, from BATHYSLAM_TEST_PG (the cluster's directory).
 // Fails the test loudly when it is missing: a storage test that silently skips proves nothing.
 std::string cluster_conninfo(const std::string& database = "postgres");
+// The same for any cluster made by scripts/pg.sh in `cluster_dir`.
+std::string socket_conninfo(const std::string& cluster_dir, const std::string& database = "postgres");
+// An environment variable that ctest sets; throws when it is missing.
+std::string required_env(const char* name);
 
 class FreshDatabase {
  public:
