@@ -11,6 +11,8 @@ find_package(PCL 1.13 REQUIRED COMPONENTS common kdtree search filters features 
 find_package(Ceres 2.1 REQUIRED)
 find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs)
 find_package(PostgreSQL REQUIRED)
+find_package(OpenSSL REQUIRED)  # SHA-256 of uploads and tokens, random tokens
+find_package(ZLIB REQUIRED)     # submap points
 find_package(GDAL 3.6 CONFIG REQUIRED)
 find_package(PROJ 9 CONFIG REQUIRED)
 find_package(nlohmann_json 3.11 REQUIRED)

@@ -1,0 +1,239 @@
+#include "server/storage/database.h"
+
+#include <poll.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+
+namespace bathyslam::storage {
+namespace {
+
+std::string shortest(double value) {
+  // PostgreSQL spells the special values its own way.
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "Infinity" : "-Infinity";
+  char buffer[32];
+  auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, end);
+}
+
+double parse_double(std::string_view text) {
+  if (text == "NaN") return std::nan("");
+  if (text == "Infinity") return INFINITY;
+  if (text == "-Infinity") return -INFINITY;
+  double value = 0;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size())
+    throw DatabaseError("XX000", "not a number from the database: '" + std::string(text) + "'");
+  return value;
+}
+
+std::string connection_message(PGconn* conn) {
+  std::string message = conn ? PQerrorMessage(conn) : "out of memory";
+  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+  return message;
+}
+
+// Connection failures have no SQLSTATE of their own; 08006 is "connection failure".
+DatabaseError connection_error(PGconn* conn) { return DatabaseError("08006", connection_message(conn)); }
+
+}  // namespace
+
+DatabaseError::DatabaseError(std::string sqlstate, const std::string& message)
+    : std::runtime_error("database error " + sqlstate + ": " + message), sqlstate_(std::move(sqlstate)),
+      message_(message) {}
+
+Param::Param(double value) : value_(shortest(value)) {}
+
+std::string float8_array(const double* values, std::size_t count) {
+  std::string text = "{";
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i) text += ',';
+    text += shortest(values[i]);
+  }
+  return text + "}";
+}
+
+std::vector<double> parse_float8_array(std::string_view text) {
+  if (text.size() < 2 || text.front() != '{' || text.back() != '}')
+    throw DatabaseError("XX000", "not a float8 array: '" + std::string(text) + "'");
+  std::vector<double> values;
+  text = text.substr(1, text.size() - 2);
+  while (!text.empty()) {
+    std::size_t comma = text.find(',');
+    values.push_back(parse_double(text.substr(0, comma)));
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+  }
+  return values;
+}
+
+int Result::affected() const {
+  const char* count = PQcmdTuples(result_.get());
+  return *count ? std::atoi(count) : 0;
+}
+
+std::string_view Result::text(int row, int column) const {
+  return {PQgetvalue(result_.get(), row, column),
+          static_cast<std::size_t>(PQgetlength(result_.get(), row, column))};
+}
+
+std::int64_t Result::int64(int row, int column) const {
+  std::string_view cell = text(row, column);
+  std::int64_t value = 0;
+  auto [end, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
+  if (ec != std::errc() || end != cell.data() + cell.size())
+    throw DatabaseError("XX000", "not an integer from the database: '" + std::string(cell) + "'");
+  return value;
+}
+
+double Result::float8(int row, int column) const { return parse_double(text(row, column)); }
+
+bool Result::boolean(int row, int column) const { return text(row, column) == "t"; }
+
+Bytes Result::bytes(int row, int column) const {
+  std::size_t length = 0;
+  unsigned char* raw = PQunescapeBytea(reinterpret_cast<const unsigned char*>(PQgetvalue(result_.get(), row, column)),
+                                       &length);
+  if (!raw) throw DatabaseError("XX000", "cannot decode a bytea value");
+  Bytes bytes(raw, raw + length);
+  PQfreemem(raw);
+  return bytes;
+}
+
+std::optional<std::int64_t> Result::optional_int64(int row, int column) const {
+  if (is_null(row, column)) return std::nullopt;
+  return int64(row, column);
+}
+
+std::optional<std::string> Result::optional_text(int row, int column) const {
+  if (is_null(row, column)) return std::nullopt;
+  return std::string(text(row, column));
+}
+
+Connection::Connection(const std::string& conninfo) : conn_(PQconnectdb(conninfo.c_str()), &PQfinish) {
+  if (!conn_ || PQstatus(conn_.get()) != CONNECTION_OK) throw connection_error(conn_.get());
+  // Server notices (e.g. "relation already exists, skipping") are not errors; keep stderr clean.
+  PQsetNoticeProcessor(conn_.get(), [](void*, const char*) {}, nullptr);
+}
+
+static Result checked(PGconn* conn, PGresult* raw) {
+  Result result(raw);
+  if (!raw) throw connection_error(conn);
+  ExecStatusType status = PQresultStatus(raw);
+  if (status == PGRES_COMMAND_OK || status == PGRES_TUPLES_OK) return result;
+  const char* sqlstate = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
+  std::string message = PQresultErrorMessage(raw);
+  while (!message.empty() && message.back() == '\n') message.pop_back();
+  throw DatabaseError(sqlstate ? sqlstate : "08006", message.empty() ? connection_message(conn) : message);
+}
+
+Result Connection::exec(std::string_view sql, std::initializer_list<Param> params) {
+  return exec(sql, std::vector<Param>(params));
+}
+
+Result Connection::exec(std::string_view sql, const std::vector<Param>& params) {
+  std::vector<const char*> values;
+  std::vector<int> lengths, formats;
+  for (const Param& param : params) {
+    values.push_back(param.value() ? param.value()->data() : nullptr);
+    lengths.push_back(param.value() ? static_cast<int>(param.value()->size()) : 0);
+    formats.push_back(param.binary() ? 1 : 0);
+  }
+  std::string statement(sql);
+  return checked(conn_.get(), PQexecParams(conn_.get(), statement.c_str(), static_cast<int>(params.size()),
+                                           nullptr, values.data(), lengths.data(), formats.data(), 0));
+}
+
+void Connection::exec_script(std::string_view sql) {
+  std::string script(sql);
+  checked(conn_.get(), PQexec(conn_.get(), script.c_str()));
+}
+
+void Connection::ensure_alive() {
+  // An idle connection has nothing to read unless the server is going away: a terminated
+  // backend sends its FATAL message and then closes. Reading until nothing is readable reaches
+  // that end of file, which is what makes libpq mark the connection bad.
+  pollfd readable{PQsocket(conn_.get()), POLLIN, 0};
+  for (int round = 0; round < 8 && PQstatus(conn_.get()) == CONNECTION_OK; ++round) {
+    if (readable.fd < 0 || poll(&readable, 1, 0) <= 0 || !PQconsumeInput(conn_.get())) break;
+    PQisBusy(conn_.get());  // parses what was read (notices go to the silent notice processor)
+  }
+  if (PQstatus(conn_.get()) == CONNECTION_OK) return;
+  PQreset(conn_.get());
+  if (PQstatus(conn_.get()) != CONNECTION_OK) throw connection_error(conn_.get());
+}
+
+bool Connection::in_transaction() const { return PQtransactionStatus(conn_.get()) != PQTRANS_IDLE; }
+
+PooledConnection::~PooledConnection() {
+  if (connection_) pool_->release(std::move(connection_));
+}
+
+ConnectionPool::ConnectionPool(std::string conninfo, std::size_t size) : conninfo_(std::move(conninfo)), size_(size) {
+  if (size_ == 0) throw std::invalid_argument("connection pool: size must be at least 1");
+  // Fail at start, not at the first request, when the database is unreachable.
+  release(std::make_unique<Connection>(conninfo_));
+  opened_ = 1;
+}
+
+PooledConnection ConnectionPool::acquire() {
+  std::unique_ptr<Connection> connection;
+  {
+    std::unique_lock lock(mutex_);
+    returned_.wait(lock, [&] { return !idle_.empty() || opened_ < size_; });
+    if (!idle_.empty()) {
+      connection = std::move(idle_.back());
+      idle_.pop_back();
+    } else {
+      ++opened_;
+    }
+  }
+  try {
+    if (connection) {
+      connection->ensure_alive();
+    } else {
+      connection = std::make_unique<Connection>(conninfo_);
+    }
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    if (!connection) --opened_;  // a connection that never opened frees its slot
+    else idle_.push_back(std::move(connection));
+    returned_.notify_one();
+    throw;
+  }
+  return PooledConnection(this, std::move(connection));
+}
+
+void ConnectionPool::release(std::unique_ptr<Connection> connection) {
+  // A connection returned mid-transaction (an exception escaped before the rollback ran) must not
+  // carry that transaction to its next user.
+  if (connection->in_transaction() && PQstatus(connection->raw()) == CONNECTION_OK) {
+    try {
+      connection->exec("ROLLBACK");
+    } catch (const DatabaseError&) {
+    }
+  }
+  std::lock_guard lock(mutex_);
+  idle_.push_back(std::move(connection));
+  returned_.notify_one();
+}
+
+Transaction::Transaction(Connection& connection) : connection_(connection) { connection_.exec("BEGIN"); }
+
+Transaction::~Transaction() {
+  if (done_) return;
+  try {
+    connection_.exec("ROLLBACK");
+  } catch (const DatabaseError&) {
+    // The connection is gone; the server has rolled the transaction back already.
+  }
+}
+
+void Transaction::commit() {
+  connection_.exec("COMMIT");
+  done_ = true;
+}
+
+}  // namespace bathyslam::storage

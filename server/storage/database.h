@@ -1,0 +1,162 @@
+#pragma once
+// The one door to PostgreSQL: connections, a small pool, transactions and typed, parameterised
+// statements. Nothing here builds SQL from values; every value travels as a libpq parameter.
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <libpq-fe.h>
+
+namespace bathyslam::storage {
+
+using Bytes = std::vector<std::uint8_t>;
+
+// A failed statement or connection, with PostgreSQL's SQLSTATE ("23505", "08006", ...) so that
+// callers can tell a unique violation from a lost connection.
+class DatabaseError : public std::runtime_error {
+ public:
+  DatabaseError(std::string sqlstate, const std::string& message);
+  const std::string& sqlstate() const { return sqlstate_; }
+  const std::string& message() const { return message_; }  // PostgreSQL's own words
+
+ private:
+  std::string sqlstate_;
+  std::string message_;
+};
+
+// One statement parameter. Text for everything PostgreSQL parses itself; binary only for bytea,
+// so that blobs are neither escaped nor doubled in size on the way in.
+class Param {
+ public:
+  Param(std::nullopt_t) {}
+  Param(const char* text) : value_(text) {}
+  Param(std::string_view text) : value_(std::string(text)) {}
+  Param(std::string text) : value_(std::move(text)) {}
+  Param(bool value) : value_(value ? "t" : "f") {}
+  Param(double value);
+  Param(const Bytes& bytes) : value_(std::string(bytes.begin(), bytes.end())), binary_(true) {}
+  template <std::integral T>
+    requires(!std::same_as<T, bool>)
+  Param(T value) : value_(std::to_string(value)) {}
+  template <typename T>
+  Param(const std::optional<T>& value) {
+    if (value) *this = Param(*value);
+  }
+
+  const std::optional<std::string>& value() const { return value_; }
+  bool binary() const { return binary_; }
+
+ private:
+  std::optional<std::string> value_;  // nullopt: SQL NULL
+  bool binary_ = false;
+};
+
+// A double[] literal ("{1,0.5,...}") in shortest exact form, so arrays of poses and
+// information matrices round-trip bit for bit.
+std::string float8_array(const double* values, std::size_t count);
+std::vector<double> parse_float8_array(std::string_view text);
+
+// Owns a PGresult; cells are read as text (PostgreSQL's text output of float8 is exact).
+class Result {
+ public:
+  explicit Result(PGresult* result) : result_(result, &PQclear) {}
+  int rows() const { return PQntuples(result_.get()); }
+  int affected() const;  // rows changed by INSERT/UPDATE/DELETE
+  bool is_null(int row, int column) const { return PQgetisnull(result_.get(), row, column) == 1; }
+  std::string_view text(int row, int column) const;
+  std::int64_t int64(int row, int column) const;
+  double float8(int row, int column) const;
+  bool boolean(int row, int column) const;
+  Bytes bytes(int row, int column) const;  // a bytea column
+  std::optional<std::int64_t> optional_int64(int row, int column) const;
+  std::optional<std::string> optional_text(int row, int column) const;
+
+ private:
+  std::unique_ptr<PGresult, decltype(&PQclear)> result_;
+};
+
+class Connection {
+ public:
+  explicit Connection(const std::string& conninfo);
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  // Runs one parameterised statement; throws DatabaseError on any failure.
+  Result exec(std::string_view sql, std::initializer_list<Param> params = {});
+  Result exec(std::string_view sql, const std::vector<Param>& params);
+  // Several statements in one string, no parameters: for migration files only (trusted SQL).
+  void exec_script(std::string_view sql);
+
+  // A server restart or a terminated backend leaves a connection that looks fine until used.
+  // Reads whatever the server sent meanwhile and reconnects if the connection turned out dead.
+  void ensure_alive();
+  bool in_transaction() const;
+
+  PGconn* raw() { return conn_.get(); }
+
+ private:
+  std::unique_ptr<PGconn, decltype(&PQfinish)> conn_;
+};
+
+class ConnectionPool;
+
+// A connection borrowed from a pool, given back when it goes out of scope.
+class PooledConnection {
+ public:
+  PooledConnection(ConnectionPool* pool, std::unique_ptr<Connection> connection)
+      : pool_(pool), connection_(std::move(connection)) {}
+  PooledConnection(PooledConnection&&) = default;
+  PooledConnection& operator=(PooledConnection&&) = delete;
+  ~PooledConnection();
+  Connection& operator*() { return *connection_; }
+  Connection* operator->() { return connection_.get(); }
+
+ private:
+  ConnectionPool* pool_;
+  std::unique_ptr<Connection> connection_;
+};
+
+// A few connections shared by threads. Connections open lazily, up to `size`; acquire() waits
+// for one to come back when all are lent out.
+class ConnectionPool {
+ public:
+  ConnectionPool(std::string conninfo, std::size_t size);
+  PooledConnection acquire();
+  const std::string& conninfo() const { return conninfo_; }
+
+ private:
+  friend class PooledConnection;
+  void release(std::unique_ptr<Connection> connection);
+
+  std::string conninfo_;
+  std::size_t size_;
+  std::size_t opened_ = 0;
+  std::vector<std::unique_ptr<Connection>> idle_;
+  std::mutex mutex_;
+  std::condition_variable returned_;
+};
+
+// BEGIN now, ROLLBACK on scope exit unless commit() was called: an exception anywhere between
+// leaves the database as it was.
+class Transaction {
+ public:
+  explicit Transaction(Connection& connection);
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  ~Transaction();
+  void commit();
+  Connection& connection() { return connection_; }
+
+ private:
+  Connection& connection_;
+  bool done_ = false;
+};
+
+}  // namespace bathyslam::storage

@@ -1,0 +1,208 @@
+#include "server/storage/job_queue.h"
+
+#include <poll.h>
+
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+namespace bathyslam::storage {
+namespace {
+
+constexpr std::string_view kChannel = "bathyslam_jobs";
+constexpr std::array<std::string_view, 5> kStateNames = {"queued", "running", "succeeded", "failed", "cancelled"};
+
+double seconds(std::chrono::milliseconds duration) { return duration.count() / 1000.0; }
+
+// The lease's identity in every statement that acts on behalf of a worker: $1, $2, $3.
+constexpr std::string_view kLeaseHeld = "id = $1 AND worker = $2 AND attempts = $3 AND state = 'running'";
+
+std::string with_lease(std::string_view head, std::string_view tail = "") {
+  return std::string(head) + " WHERE " + std::string(kLeaseHeld) + std::string(tail);
+}
+
+// A dedicated connection that LISTENs; nullptr when it cannot be opened (the caller polls).
+std::unique_ptr<Connection> listen(const std::string& conninfo) {
+  try {
+    auto connection = std::make_unique<Connection>(conninfo);
+    connection->exec("LISTEN " + std::string(kChannel));
+    return connection;
+  } catch (const DatabaseError&) {
+    return nullptr;
+  }
+}
+
+// Sleeps until a notification arrives or `timeout` passes. False when the connection broke.
+bool await_notification(Connection& connection, std::chrono::milliseconds timeout) {
+  pollfd descriptor{PQsocket(connection.raw()), POLLIN, 0};
+  if (descriptor.fd < 0) return false;
+  if (poll(&descriptor, 1, static_cast<int>(timeout.count())) < 0) return false;
+  if (!PQconsumeInput(connection.raw())) return false;
+  while (PGnotify* notification = PQnotifies(connection.raw())) PQfreemem(notification);
+  return PQstatus(connection.raw()) == CONNECTION_OK;
+}
+
+}  // namespace
+
+std::string to_string(JobState state) { return std::string(kStateNames[static_cast<int>(state)]); }
+
+JobState parse_job_state(std::string_view text) {
+  for (std::size_t i = 0; i < kStateNames.size(); ++i)
+    if (kStateNames[i] == text) return static_cast<JobState>(i);
+  throw std::invalid_argument("unknown job state '" + std::string(text) + "'");
+}
+
+JobQueue::JobQueue(ConnectionPool& pool, QueueOptions options) : pool_(pool), options_(options) {
+  if (options_.lease.count() <= 0 || options_.poll.count() <= 0)
+    throw std::invalid_argument("job queue: lease and poll interval must be positive");
+}
+
+std::int64_t JobQueue::enqueue(const NewJob& job) {
+  if (job.configuration != "odometry" && job.configuration != "gicp" && job.configuration != "mchs")
+    throw std::invalid_argument("unknown configuration '" + job.configuration + "' (odometry, gicp or mchs)");
+  if (job.max_attempts < 1) throw std::invalid_argument("max_attempts must be at least 1");
+  const nlohmann::json parameters = job.parameters.is_null() ? nlohmann::json::object() : job.parameters;
+  if (!parameters.is_object()) throw std::invalid_argument("job parameters must be a JSON object");
+  auto connection = pool_.acquire();
+  // NOTIFY is delivered at commit, so a woken worker always finds the job.
+  return connection
+      ->exec(
+          "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts)"
+          " VALUES ($1, $2, $3, $4) RETURNING id)"
+          " SELECT id, pg_notify($5, id::text) FROM job",
+          {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
+      .int64(0, 0);
+}
+
+std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
+  if (worker.empty()) throw std::invalid_argument("a worker needs a name");
+  auto connection = pool_.acquire();
+  // SKIP LOCKED: concurrent claimers each take a different row instead of queueing on one.
+  Result row = connection->exec(
+      "UPDATE jobs SET state = 'running', attempts = attempts + 1, worker = $1,"
+      " started_at = coalesce(started_at, now()), heartbeat_at = now(),"
+      " lease_expires_at = now() + make_interval(secs => $2)"
+      " WHERE id = (SELECT id FROM jobs WHERE state = 'queued' ORDER BY id LIMIT 1 FOR UPDATE SKIP LOCKED)"
+      " RETURNING id, survey_id, configuration, parameters, attempts",
+      {worker, seconds(options_.lease)});
+  if (row.rows() == 0) return std::nullopt;
+  ClaimedJob job;
+  job.lease = {row.int64(0, 0), worker, static_cast<int>(row.int64(0, 4))};
+  job.survey_id = row.int64(0, 1);
+  job.configuration = row.text(0, 2);
+  job.parameters = nlohmann::json::parse(row.text(0, 3));
+  return job;
+}
+
+std::optional<ClaimedJob> JobQueue::wait_for_job(const std::string& worker, std::chrono::milliseconds max_wait) {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point deadline = Clock::now() + max_wait;
+  std::unique_ptr<Connection> listener;  // opened only once the queue turns out empty
+  while (true) {
+    reap();
+    if (auto job = claim(worker)) return job;
+    if (!listener && (listener = listen(pool_.conninfo()))) {
+      continue;  // claim once more now that we listen: a job enqueued just before is not missed
+    }
+    const Clock::time_point now = Clock::now();
+    if (now >= deadline) return std::nullopt;
+    auto wait = std::min(options_.poll, std::chrono::ceil<std::chrono::milliseconds>(deadline - now));
+    if (listener && await_notification(*listener, wait)) continue;
+    // No listener, or it broke (the server restarted): poll this round, listen again next.
+    if (!listener) std::this_thread::sleep_for(wait);
+    listener.reset();
+  }
+}
+
+bool JobQueue::heartbeat(const Lease& lease) {
+  auto connection = pool_.acquire();
+  return connection
+             ->exec(with_lease("UPDATE jobs SET heartbeat_at = now(), lease_expires_at = now() + make_interval(secs => $4)"),
+                    {lease.job_id, lease.worker, lease.attempt, seconds(options_.lease)})
+             .affected() == 1;
+}
+
+bool JobQueue::succeed(const Lease& lease) { return finish(lease, JobState::kSucceeded, std::nullopt); }
+
+bool JobQueue::fail(const Lease& lease, const std::string& error) { return finish(lease, JobState::kFailed, error); }
+
+bool JobQueue::finish(const Lease& lease, JobState state, const std::optional<std::string>& error) {
+  auto connection = pool_.acquire();
+  return connection
+             ->exec(with_lease("UPDATE jobs SET state = $4, error = $5, finished_at = now(), lease_expires_at = NULL"),
+                    {lease.job_id, lease.worker, lease.attempt, to_string(state), error})
+             .affected() == 1;
+}
+
+bool JobQueue::cancel(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  return connection
+             ->exec("UPDATE jobs SET state = 'cancelled', finished_at = now(), lease_expires_at = NULL"
+                    " WHERE id = $1 AND state IN ('queued', 'running')",
+                    {job_id})
+             .affected() == 1;
+}
+
+int JobQueue::reap() {
+  auto connection = pool_.acquire();
+  // One statement, so the state change and its event commit together. SKIP LOCKED: a row that
+  // a heartbeat is renewing right now is not expired after all.
+  Result reaped = connection->exec(
+      "WITH reaped AS ("
+      "  UPDATE jobs SET"
+      "   state = CASE WHEN attempts >= max_attempts THEN 'failed' ELSE 'queued' END,"
+      "   error = CASE WHEN attempts >= max_attempts THEN format("
+      "     'lease of worker %s expired on attempt %s of %s; giving up', worker, attempts, max_attempts)"
+      "     ELSE error END,"
+      "   finished_at = CASE WHEN attempts >= max_attempts THEN now() END,"
+      "   lease_expires_at = NULL"
+      "  WHERE id IN (SELECT id FROM jobs WHERE state = 'running' AND lease_expires_at < now()"
+      "               FOR UPDATE SKIP LOCKED)"
+      "  RETURNING id, attempts, state, worker"
+      "), logged AS ("
+      "  INSERT INTO job_events (job_id, attempt, stage, progress, message)"
+      "  SELECT id, attempts, 'lease-expired', 0, format('worker %s stopped renewing its lease; %s', worker,"
+      "         CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM reaped"
+      ")"
+      " SELECT count(*), count(*) FILTER (WHERE state = 'queued') FROM reaped");
+  if (reaped.int64(0, 1) > 0) connection->exec("SELECT pg_notify($1, '')", {kChannel});
+  return static_cast<int>(reaped.int64(0, 0));
+}
+
+bool JobQueue::record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message) {
+  if (!(progress >= 0 && progress <= 1)) throw std::invalid_argument("progress must be within [0, 1]");
+  if (stage.empty()) throw std::invalid_argument("an event needs a stage");
+  auto connection = pool_.acquire();
+  // Only while the lease is held: a worker that lost its job must not write into its history.
+  return connection
+             ->exec("INSERT INTO job_events (job_id, attempt, stage, progress, message)"
+                    " SELECT $1::bigint, $3::integer, $4::text, $5::float8, $6::text FROM jobs WHERE " +
+                        std::string(kLeaseHeld),
+                    {lease.job_id, lease.worker, lease.attempt, stage, progress, message})
+             .affected() == 1;
+}
+
+std::vector<JobEvent> JobQueue::events(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT attempt, stage, progress, message FROM job_events WHERE job_id = $1 ORDER BY id", {job_id});
+  std::vector<JobEvent> events;
+  for (int row = 0; row < rows.rows(); ++row)
+    events.push_back({static_cast<int>(rows.int64(row, 0)), std::string(rows.text(row, 1)), rows.float8(row, 2),
+                      std::string(rows.text(row, 3))});
+  return events;
+}
+
+JobStatus JobQueue::status(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(
+      "SELECT id, survey_id, configuration, state, attempts, max_attempts, worker, error FROM jobs WHERE id = $1",
+      {job_id});
+  if (row.rows() == 0) throw std::out_of_range("no job " + std::to_string(job_id));
+  return {row.int64(0, 0), row.int64(0, 1), std::string(row.text(0, 2)), parse_job_state(row.text(0, 3)),
+          static_cast<int>(row.int64(0, 4)), static_cast<int>(row.int64(0, 5)), row.optional_text(0, 6),
+          row.optional_text(0, 7)};
+}
+
+}  // namespace bathyslam::storage

@@ -1,0 +1,105 @@
+#pragma once
+// The job queue, in PostgreSQL so that any number of servers share it. A worker claims a job with
+// a lease that its heartbeat renews; a worker that dies stops renewing, and the reaper puts the
+// job back in the queue (or fails it once it has used up its attempts). Idle workers sleep on
+// LISTEN and are woken by the NOTIFY of every enqueue; polling covers a missed notification.
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "server/storage/database.h"
+
+namespace bathyslam::storage {
+
+enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCancelled };
+std::string to_string(JobState state);
+JobState parse_job_state(std::string_view text);  // throws std::invalid_argument
+
+struct QueueOptions {
+  std::chrono::milliseconds lease{30'000};  // a worker must heartbeat well within this
+  std::chrono::milliseconds poll{5'000};    // longest sleep without a notification
+};
+
+struct NewJob {
+  std::int64_t survey_id = 0;
+  std::string configuration;  // odometry, gicp or mchs
+  nlohmann::json parameters = nlohmann::json::object();  // the effective parameters
+  int max_attempts = 3;
+};
+
+// One claim of one job. The attempt number tells a worker's claim apart from a later one of the
+// same job, so that a worker whose lease was reaped can no longer touch the job.
+struct Lease {
+  std::int64_t job_id = 0;
+  std::string worker;
+  int attempt = 0;
+};
+
+struct ClaimedJob {
+  Lease lease;
+  std::int64_t survey_id = 0;
+  std::string configuration;
+  nlohmann::json parameters;
+};
+
+struct JobStatus {
+  std::int64_t id = 0;
+  std::int64_t survey_id = 0;
+  std::string configuration;
+  JobState state = JobState::kQueued;
+  int attempts = 0;
+  int max_attempts = 0;
+  std::optional<std::string> worker;  // the last worker to claim it
+  std::optional<std::string> error;
+};
+
+struct JobEvent {
+  int attempt = 0;
+  std::string stage;
+  double progress = 0;
+  std::string message;
+};
+
+class JobQueue {
+ public:
+  explicit JobQueue(ConnectionPool& pool, QueueOptions options = {});
+
+  // Throws std::invalid_argument for an unknown configuration or max_attempts < 1.
+  std::int64_t enqueue(const NewJob& job);
+
+  // The oldest queued job, now leased to `worker`; nullopt if none is queued.
+  std::optional<ClaimedJob> claim(const std::string& worker);
+  // Reaps, then claims; if nothing is queued, sleeps until notified (or the poll interval
+  // passes) and tries again, until `max_wait` has passed.
+  std::optional<ClaimedJob> wait_for_job(const std::string& worker, std::chrono::milliseconds max_wait);
+
+  // Renews the lease. False when the lease is lost (reaped or the job cancelled): stop working.
+  bool heartbeat(const Lease& lease);
+  // Final states; false (and no change) when the lease is no longer this worker's. A failure
+  // reported by the worker is final: retrying the same input would fail the same way.
+  bool succeed(const Lease& lease);
+  bool fail(const Lease& lease, const std::string& error);
+  // Queued or running jobs become cancelled; a running worker learns it at its next heartbeat.
+  bool cancel(std::int64_t job_id);
+
+  // Jobs whose lease has expired: re-queued while they have attempts left, else failed with the
+  // reason. Returns how many jobs it touched.
+  int reap();
+
+  bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
+  std::vector<JobEvent> events(std::int64_t job_id);
+  JobStatus status(std::int64_t job_id);  // throws std::out_of_range for an unknown id
+
+ private:
+  bool finish(const Lease& lease, JobState state, const std::optional<std::string>& error);
+
+  ConnectionPool& pool_;
+  QueueOptions options_;
+};
+
+}  // namespace bathyslam::storage

@@ -1,0 +1,262 @@
+#include "server/storage/result_store.h"
+
+#include <zlib.h>
+
+#include <array>
+#include <bit>
+#include <cstring>
+#include <stdexcept>
+
+#include "core/candidates/candidates.h"
+
+namespace bathyslam::storage {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "points are stored as little-endian float32");
+
+std::string pose_array(const Eigen::Isometry3d& pose) {
+  const Eigen::Quaterniond q(pose.rotation());
+  const Eigen::Vector3d t = pose.translation();
+  const std::array<double, 7> values = {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()};
+  return float8_array(values.data(), values.size());
+}
+
+Eigen::Isometry3d parse_pose(std::string_view text) {
+  std::vector<double> v = parse_float8_array(text);
+  if (v.size() != 7) throw DatabaseError("XX000", "a pose needs 7 numbers, got " + std::to_string(v.size()));
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::Quaterniond(v[0], v[1], v[2], v[3]).normalized().toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(v[4], v[5], v[6]);
+  return pose;
+}
+
+// float32 triples; deflated only when that actually saves space (sounding coordinates are
+// noisy, so it often does not save much).
+std::pair<std::string, Bytes> encode_points(const std::vector<Eigen::Vector3f>& points) {
+  Bytes raw(points.size() * 3 * sizeof(float));
+  for (std::size_t i = 0; i < points.size(); ++i) std::memcpy(raw.data() + i * 12, points[i].data(), 12);
+  uLongf packed_size = compressBound(raw.size());
+  Bytes packed(packed_size);
+  if (compress2(packed.data(), &packed_size, raw.data(), raw.size(), Z_BEST_SPEED) == Z_OK &&
+      packed_size < raw.size() * 9 / 10) {
+    packed.resize(packed_size);
+    return {"f32le+zlib", std::move(packed)};
+  }
+  return {"f32le", std::move(raw)};
+}
+
+std::vector<Eigen::Vector3f> decode_points(std::string_view encoding, const Bytes& data, std::size_t count) {
+  Bytes raw;
+  if (encoding == "f32le+zlib") {
+    raw.resize(count * 12);
+    uLongf size = raw.size();
+    if (uncompress(raw.data(), &size, data.data(), data.size()) != Z_OK || size != raw.size())
+      throw std::runtime_error("submap points: corrupt zlib data");
+  } else if (encoding == "f32le") {
+    raw = data;
+  } else {
+    throw std::runtime_error("submap points: unknown encoding '" + std::string(encoding) + "'");
+  }
+  if (raw.size() != count * 12) throw std::runtime_error("submap points: size does not match the point count");
+  std::vector<Eigen::Vector3f> points(count);
+  for (std::size_t i = 0; i < count; ++i) std::memcpy(points[i].data(), raw.data() + i * 12, 12);
+  return points;
+}
+
+std::string polygon(const Footprint& footprint) {
+  std::string text = "(";
+  for (std::size_t k = 0; k < footprint.corners.size(); ++k) {
+    if (k) text += ',';
+    text += "(" + float8_array(footprint.corners[k].data(), 2).substr(1);
+    text.back() = ')';
+  }
+  return text + ")";
+}
+
+std::string to_string(RegistrationPath path) {
+  switch (path) {
+    case RegistrationPath::kDirect: return "direct";
+    case RegistrationPath::kFeatureAided: return "feature-aided";
+    case RegistrationPath::kNone: break;
+  }
+  throw std::logic_error("no name for RegistrationPath::kNone");
+}
+
+RegistrationPath parse_path(const std::optional<std::string>& text) {
+  if (!text) return RegistrationPath::kNone;
+  if (*text == "direct") return RegistrationPath::kDirect;
+  if (*text == "feature-aided") return RegistrationPath::kFeatureAided;
+  throw std::runtime_error("unknown registration path '" + *text + "'");
+}
+
+ConstraintType parse_constraint_type(std::string_view text) {
+  if (text == "odometry") return ConstraintType::kOdometry;
+  if (text == "adjacent") return ConstraintType::kAdjacent;
+  throw std::runtime_error("constraint type '" + std::string(text) + "' is not known to this version of the core");
+}
+
+}  // namespace
+
+void ResultStore::save_submaps(std::int64_t job_id, const std::vector<Submap>& submaps) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  for (const Submap& submap : submaps) {
+    auto [encoding, points] = encode_points(submap.points);
+    std::optional<std::string> reference;
+    if (submap.reference_pose) reference = pose_array(*submap.reference_pose);
+    connection->exec(
+        "INSERT INTO submaps (job_id, idx, line, time_begin, time_mid, time_end, dr_pose, reference_pose,"
+        " footprint, point_count, points_encoding, points)"
+        " VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12)",
+        {job_id, submap.index, submap.line, submap.time_begin, submap.time_mid, submap.time_end,
+         pose_array(submap.dr_pose), reference, polygon(footprint_of(submap, submap.dr_pose)), submap.points.size(),
+         encoding, points});
+  }
+  transaction.commit();
+}
+
+std::vector<Submap> ResultStore::load_submaps(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT idx, line, time_begin, time_mid, time_end, dr_pose, reference_pose, point_count, points_encoding, points"
+      " FROM submaps WHERE job_id = $1 ORDER BY idx",
+      {job_id});
+  std::vector<Submap> submaps(rows.rows());
+  for (int row = 0; row < rows.rows(); ++row) {
+    Submap& s = submaps[row];
+    s.index = static_cast<int>(rows.int64(row, 0));
+    s.line = static_cast<int>(rows.int64(row, 1));
+    s.time_begin = rows.float8(row, 2);
+    s.time_mid = rows.float8(row, 3);
+    s.time_end = rows.float8(row, 4);
+    s.dr_pose = parse_pose(rows.text(row, 5));
+    if (!rows.is_null(row, 6)) s.reference_pose = parse_pose(rows.text(row, 6));
+    s.points = decode_points(rows.text(row, 8), rows.bytes(row, 9), static_cast<std::size_t>(rows.int64(row, 7)));
+  }
+  return submaps;
+}
+
+std::vector<int> ResultStore::submaps_overlapping(std::int64_t job_id, const Eigen::AlignedBox2d& area) {
+  auto connection = pool_.acquire();
+  const std::array<double, 4> corners = {area.min().x(), area.min().y(), area.max().x(), area.max().y()};
+  Result rows = connection->exec(
+      "SELECT idx FROM submaps WHERE job_id = $1"
+      " AND footprint && box(point($2, $3), point($4, $5))::polygon ORDER BY idx",
+      {job_id, corners[0], corners[1], corners[2], corners[3]});
+  std::vector<int> indices;
+  for (int row = 0; row < rows.rows(); ++row) indices.push_back(static_cast<int>(rows.int64(row, 0)));
+  return indices;
+}
+
+void ResultStore::save_constraints(std::int64_t job_id, const std::vector<StoredConstraint>& constraints) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  for (std::size_t i = 0; i < constraints.size(); ++i) {
+    const Constraint& c = constraints[i].constraint;
+    if ((c.type == ConstraintType::kOdometry) != (constraints[i].path == RegistrationPath::kNone))
+      throw std::invalid_argument("constraint " + std::to_string(i) +
+                                  ": odometry constraints have no registration path, registrations need one");
+    // Row-major, the order a reader of the table expects.
+    const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> information = c.information;
+    std::optional<std::string> path;
+    if (constraints[i].path != RegistrationPath::kNone) path = to_string(constraints[i].path);
+    connection->exec(
+        "INSERT INTO constraints (job_id, idx, type, path, from_submap, to_submap, measured, information,"
+        " converged, fitness, overlap_points, overlap_mse_m2, overlap_fraction, accepted, reason)"
+        " VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15)",
+        {job_id, i, bathyslam::to_string(c.type), path, c.from, c.to, pose_array(c.measured),
+         float8_array(information.data(), 36), c.quality.converged, c.quality.fitness, c.quality.overlap_points,
+         c.quality.overlap_mse_m2, c.overlap_fraction, c.accepted, c.reason});
+  }
+  transaction.commit();
+}
+
+std::vector<StoredConstraint> ResultStore::load_constraints(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT type, path, from_submap, to_submap, measured, information, converged, fitness, overlap_points,"
+      " overlap_mse_m2, overlap_fraction, accepted, reason FROM constraints WHERE job_id = $1 ORDER BY idx",
+      {job_id});
+  std::vector<StoredConstraint> constraints(rows.rows());
+  for (int row = 0; row < rows.rows(); ++row) {
+    Constraint& c = constraints[row].constraint;
+    c.type = parse_constraint_type(rows.text(row, 0));
+    constraints[row].path = parse_path(rows.optional_text(row, 1));
+    c.from = static_cast<int>(rows.int64(row, 2));
+    c.to = static_cast<int>(rows.int64(row, 3));
+    c.measured = parse_pose(rows.text(row, 4));
+    std::vector<double> information = parse_float8_array(rows.text(row, 5));
+    if (information.size() != 36) throw std::runtime_error("an information matrix needs 36 numbers");
+    c.information = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(information.data());
+    c.quality.converged = rows.boolean(row, 6);
+    c.quality.fitness = rows.float8(row, 7);
+    c.quality.overlap_points = static_cast<std::size_t>(rows.int64(row, 8));
+    c.quality.overlap_mse_m2 = rows.float8(row, 9);
+    c.overlap_fraction = rows.float8(row, 10);
+    c.accepted = rows.boolean(row, 11);
+    c.reason = rows.text(row, 12);
+  }
+  return constraints;
+}
+
+void ResultStore::save_optimized_poses(std::int64_t job_id, const std::vector<Eigen::Isometry3d>& poses) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    connection->exec("INSERT INTO optimized_poses (job_id, submap, pose) VALUES ($1, $2, $3)",
+                     {job_id, i, pose_array(poses[i])});
+  transaction.commit();
+}
+
+std::vector<Eigen::Isometry3d> ResultStore::load_optimized_poses(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec("SELECT submap, pose FROM optimized_poses WHERE job_id = $1 ORDER BY submap", {job_id});
+  std::vector<Eigen::Isometry3d> poses;
+  for (int row = 0; row < rows.rows(); ++row) {
+    if (rows.int64(row, 0) != row) throw std::runtime_error("optimized poses of job " + std::to_string(job_id) + " have a gap");
+    poses.push_back(parse_pose(rows.text(row, 1)));
+  }
+  return poses;
+}
+
+void ResultStore::put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data) {
+  if (key.format != "geotiff" && key.format != "openvdb")
+    throw std::invalid_argument("tile format '" + key.format + "': geotiff or openvdb");
+  if (key.level < 0) throw std::invalid_argument("tile level must be non-negative");
+  auto connection = pool_.acquire();
+  connection->exec(
+      "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data) VALUES ($1, $2, $3, $4, $5, $6)"
+      " ON CONFLICT (job_id, format, level, tile_col, tile_row) DO UPDATE SET data = EXCLUDED.data",
+      {job_id, key.format, key.level, key.col, key.row, data});
+}
+
+std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(
+      "SELECT data FROM tiles WHERE job_id = $1 AND format = $2 AND level = $3 AND tile_col = $4 AND tile_row = $5",
+      {job_id, key.format, key.level, key.col, key.row});
+  if (row.rows() == 0) return std::nullopt;
+  return row.bytes(0, 0);
+}
+
+void ResultStore::save_report(std::int64_t job_id, const Report& report) {
+  if (!report.report.is_object()) throw std::invalid_argument("a report must be a JSON object");
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  connection->exec("INSERT INTO reports (job_id, report) VALUES ($1, $2)", {job_id, report.report.dump()});
+  for (const auto& [name, png] : report.plots)
+    connection->exec("INSERT INTO report_plots (job_id, name, png) VALUES ($1, $2, $3)", {job_id, name, png});
+  transaction.commit();
+}
+
+std::optional<Report> ResultStore::load_report(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result head = connection->exec("SELECT report FROM reports WHERE job_id = $1", {job_id});
+  if (head.rows() == 0) return std::nullopt;
+  Report report{nlohmann::json::parse(head.text(0, 0)), {}};
+  Result plots = connection->exec("SELECT name, png FROM report_plots WHERE job_id = $1", {job_id});
+  for (int row = 0; row < plots.rows(); ++row) report.plots[std::string(plots.text(row, 0))] = plots.bytes(row, 1);
+  return report;
+}
+
+}  // namespace bathyslam::storage

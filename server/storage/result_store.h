@@ -1,0 +1,66 @@
+#pragma once
+// What a job produces, stored under the job: submaps, constraints, optimized poses, map tiles
+// and the quality report. Poses are stored as quaternion (w, x, y, z) + translation.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "core/pipeline/pipeline.h"
+#include "core/submaps/submap.h"
+#include "server/storage/database.h"
+
+namespace bathyslam::storage {
+
+// How a registration constraint was measured; core will tell the two apart with the feature path.
+enum class RegistrationPath { kNone, kDirect, kFeatureAided };  // kNone: odometry
+
+struct StoredConstraint {
+  Constraint constraint;
+  RegistrationPath path = RegistrationPath::kNone;
+};
+
+struct TileKey {
+  std::string format;  // geotiff or openvdb
+  int level = 0;
+  int col = 0;
+  int row = 0;
+};
+
+struct Report {
+  nlohmann::json report;
+  std::map<std::string, Bytes> plots;  // name -> PNG
+};
+
+class ResultStore {
+ public:
+  explicit ResultStore(ConnectionPool& pool) : pool_(pool) {}
+
+  // Each save replaces nothing: it inserts in one transaction and fails (changing nothing) if
+  // the job already has those rows.
+  void save_submaps(std::int64_t job_id, const std::vector<Submap>& submaps);
+  std::vector<Submap> load_submaps(std::int64_t job_id);  // by index
+  // Submaps whose DR footprint meets the rectangle (map frame): the lookup of tiling.
+  std::vector<int> submaps_overlapping(std::int64_t job_id, const Eigen::AlignedBox2d& area);
+
+  void save_constraints(std::int64_t job_id, const std::vector<StoredConstraint>& constraints);
+  std::vector<StoredConstraint> load_constraints(std::int64_t job_id);  // in saved order
+
+  void save_optimized_poses(std::int64_t job_id, const std::vector<Eigen::Isometry3d>& poses);  // by submap
+  std::vector<Eigen::Isometry3d> load_optimized_poses(std::int64_t job_id);
+
+  void put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data);  // replaces the same key
+  std::optional<Bytes> tile(std::int64_t job_id, const TileKey& key);
+
+  void save_report(std::int64_t job_id, const Report& report);
+  std::optional<Report> load_report(std::int64_t job_id);
+
+ private:
+  ConnectionPool& pool_;
+};
+
+}  // namespace bathyslam::storage

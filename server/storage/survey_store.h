@@ -1,0 +1,71 @@
+#pragma once
+// Tenants, their API tokens, and their surveys: uploaded files (in chunks, with size and
+// SHA-256) and the validation of each survey's bundle.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "server/storage/database.h"
+
+namespace bathyslam::storage {
+
+using Sha256 = std::array<std::uint8_t, 32>;
+Sha256 sha256(const Bytes& bytes);
+std::string hex(const Sha256& digest);
+
+struct FileUpload {
+  std::string name;  // a plain file name: letters, digits, '.', '_', '-'; no directories
+  Bytes content;
+};
+
+struct StoredFile {
+  std::int64_t id = 0;
+  std::string name;
+  std::int64_t size_bytes = 0;
+  Sha256 sha256{};
+  int chunk_count = 0;
+};
+
+struct Validation {
+  bool valid = false;
+  nlohmann::json problems = nlohmann::json::array();
+  nlohmann::json summary;  // null when the bundle did not parse
+};
+
+class SurveyStore {
+ public:
+  // Files are split into chunks of `chunk_bytes` (1 MiB by default: well under PostgreSQL's
+  // 1 GB field limit and small enough to stream).
+  explicit SurveyStore(ConnectionPool& pool, std::size_t chunk_bytes = 1 << 20);
+
+  std::int64_t create_tenant(const std::string& name);
+  // A new random token for the tenant; only its hash is stored, so this is the one chance to
+  // see it.
+  std::string issue_token(std::int64_t tenant_id, const std::string& description);
+  std::optional<std::int64_t> tenant_of_token(const std::string& token);  // nullopt: unknown or revoked
+  bool revoke_token(const std::string& token);
+
+  // The survey and all its files in one transaction: a failure anywhere leaves nothing.
+  // Throws std::invalid_argument for a bad name before touching the database.
+  std::int64_t create_survey(std::int64_t tenant_id, const std::string& name, const std::vector<FileUpload>& files);
+  std::vector<StoredFile> files(std::int64_t survey_id);
+  // Reassembles a file and checks its size and SHA-256; throws std::out_of_range if there is no
+  // such file and std::runtime_error if it does not match what was uploaded.
+  Bytes read_file(std::int64_t survey_id, const std::string& name);
+
+  void save_validation(std::int64_t survey_id, const Validation& validation);
+  std::optional<Validation> validation(std::int64_t survey_id);
+
+  // Removes the survey and everything under it (files, jobs, results). False if there was none.
+  bool delete_survey(std::int64_t survey_id);
+
+ private:
+  ConnectionPool& pool_;
+  std::size_t chunk_bytes_;
+};
+
+}  // namespace bathyslam::storage

@@ -1,0 +1,219 @@
+// Job results round-trip, and a survey's deletion takes everything under it.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "server/storage/job_queue.h"
+#include "server/storage/result_store.h"
+#include "server/storage/survey_store.h"
+#include "tests/integration/fresh_database.h"
+
+namespace bathyslam::storage {
+namespace {
+
+Eigen::Isometry3d a_pose(double yaw, double x, double y, double z) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()) *
+                   Eigen::AngleAxisd(-0.01, Eigen::Vector3d::UnitY()))
+                      .toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(x, y, z);
+  return pose;
+}
+
+// `smooth`: a gently sloping seafloor on a regular grid, which deflates well; otherwise noise.
+Submap a_submap(int index, bool smooth) {
+  Submap s;
+  s.index = index;
+  s.line = index == 1 ? -1 : 2;
+  s.time_begin = 1.7e9 + index * 10.123456789;
+  s.time_mid = s.time_begin + 5.0000001;
+  s.time_end = s.time_begin + 9.99;
+  s.dr_pose = a_pose(0.3 + index, 120.5 + 40 * index, -75.25, -10.125);
+  if (index == 0) s.reference_pose = a_pose(0.31, 121.0, -75.0, -10.0);
+  std::mt19937 random(index);
+  std::normal_distribution<float> noise(0, 5);
+  for (int i = 0; i < 2000; ++i) {
+    if (smooth) s.points.emplace_back(static_cast<float>(i % 50), static_cast<float>(i / 50), -10.0f);
+    else s.points.emplace_back(noise(random), noise(random), noise(random) - 10);
+  }
+  return s;
+}
+
+struct JobFixture {
+  testing::FreshDatabase db;
+  ConnectionPool pool{db.conninfo(), 2};
+  SurveyStore surveys{pool};
+  JobQueue jobs{pool};
+  ResultStore results{pool};
+  std::int64_t survey = surveys.create_survey(surveys.create_tenant("acme"), "lake", {{"nav.csv", {1, 2, 3}}});
+  std::int64_t job = jobs.enqueue({survey, "gicp"});
+};
+
+void expect_same_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  // Through a quaternion the rotation comes back to within rounding, the translation exactly.
+  EXPECT_TRUE(a.linear().isApprox(b.linear(), 1e-15)) << a.linear() << "\nvs\n" << b.linear();
+  EXPECT_EQ(a.translation(), b.translation());
+}
+
+TEST(ResultStore, SubmapsRoundTripEveryField) {
+  JobFixture f;
+  const std::vector<Submap> saved = {a_submap(0, false), a_submap(1, true), a_submap(2, false)};
+  f.results.save_submaps(f.job, saved);
+  // Noise stays raw, the regular grid is deflated: both encodings are exercised.
+  EXPECT_EQ(f.db.scalar("SELECT count(*) FROM submaps WHERE points_encoding = 'f32le+zlib'"), 1);
+  std::vector<Submap> loaded = f.results.load_submaps(f.job);
+  ASSERT_EQ(loaded.size(), saved.size());
+  for (std::size_t i = 0; i < saved.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(loaded[i].index, saved[i].index);
+    EXPECT_EQ(loaded[i].line, saved[i].line);
+    EXPECT_EQ(loaded[i].time_begin, saved[i].time_begin);
+    EXPECT_EQ(loaded[i].time_mid, saved[i].time_mid);
+    EXPECT_EQ(loaded[i].time_end, saved[i].time_end);
+    expect_same_pose(loaded[i].dr_pose, saved[i].dr_pose);
+    ASSERT_EQ(loaded[i].reference_pose.has_value(), saved[i].reference_pose.has_value());
+    if (saved[i].reference_pose) expect_same_pose(*loaded[i].reference_pose, *saved[i].reference_pose);
+    EXPECT_EQ(loaded[i].points, saved[i].points);
+  }
+  // A second save of the same submaps changes nothing and says why.
+  EXPECT_THROW(f.results.save_submaps(f.job, {a_submap(5, true), a_submap(0, true)}), DatabaseError);
+  EXPECT_EQ(f.db.scalar("SELECT count(*) FROM submaps"), 3);
+}
+
+TEST(ResultStore, FootprintsAnswerTheTilingLookup) {
+  JobFixture f;
+  f.results.save_submaps(f.job, {a_submap(0, false), a_submap(1, false), a_submap(2, false)});
+  // Submap 2 sits around (200.5, -75.25), the others 40 and 80 m west of it.
+  EXPECT_EQ(f.results.submaps_overlapping(f.job, Eigen::AlignedBox2d(Eigen::Vector2d(195, -80), Eigen::Vector2d(205, -70))),
+            std::vector<int>{2});
+  EXPECT_EQ(f.results.submaps_overlapping(f.job, Eigen::AlignedBox2d(Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 10))),
+            std::vector<int>{});
+  EXPECT_EQ(f.results.submaps_overlapping(f.job, Eigen::AlignedBox2d(Eigen::Vector2d(100, -100), Eigen::Vector2d(220, 0))),
+            (std::vector<int>{0, 1, 2}));
+}
+
+TEST(ResultStore, ConstraintsRoundTripEveryField) {
+  JobFixture f;
+  f.results.save_submaps(f.job, {a_submap(0, false), a_submap(1, false), a_submap(2, false)});
+  StoredConstraint odometry;
+  odometry.constraint.type = ConstraintType::kOdometry;
+  odometry.constraint.from = 0;
+  odometry.constraint.to = 1;
+  odometry.constraint.measured = a_pose(0.01, 40.0, 0.125, -0.5);
+  StoredConstraint registration;
+  Constraint& c = registration.constraint;
+  registration.path = RegistrationPath::kDirect;
+  c.type = ConstraintType::kAdjacent;
+  c.from = 0;
+  c.to = 2;
+  c.measured = a_pose(-0.2, 80.25, 1.0 / 3.0, 0.1);
+  for (int r = 0; r < 6; ++r)
+    for (int k = 0; k < 6; ++k) c.information(r, k) = r == k ? 100.0 / (r + 1) : 0.01 * (r + 1) * (k + 2);
+  c.quality = {true, 0.123456789, 1234, 0.0625};
+  c.overlap_fraction = 0.37;
+  c.accepted = false;
+  c.reason = "overlap MSE 6.1 m² > 5 m²";
+  f.results.save_constraints(f.job, {odometry, registration});
+
+  std::vector<StoredConstraint> loaded = f.results.load_constraints(f.job);
+  ASSERT_EQ(loaded.size(), 2u);
+  EXPECT_EQ(loaded[0].path, RegistrationPath::kNone);
+  EXPECT_EQ(loaded[0].constraint.type, ConstraintType::kOdometry);
+  EXPECT_EQ(loaded[0].constraint.information, Information6::Identity());
+  EXPECT_TRUE(loaded[0].constraint.accepted);
+  const Constraint& l = loaded[1].constraint;
+  EXPECT_EQ(loaded[1].path, RegistrationPath::kDirect);
+  EXPECT_EQ(l.type, c.type);
+  EXPECT_EQ(l.from, c.from);
+  EXPECT_EQ(l.to, c.to);
+  expect_same_pose(l.measured, c.measured);
+  EXPECT_EQ(l.information, c.information);  // exactly, and not transposed
+  EXPECT_EQ(l.quality.converged, c.quality.converged);
+  EXPECT_EQ(l.quality.fitness, c.quality.fitness);
+  EXPECT_EQ(l.quality.overlap_points, c.quality.overlap_points);
+  EXPECT_EQ(l.quality.overlap_mse_m2, c.quality.overlap_mse_m2);
+  EXPECT_EQ(l.overlap_fraction, c.overlap_fraction);
+  EXPECT_EQ(l.accepted, c.accepted);
+  EXPECT_EQ(l.reason, c.reason);
+
+  // A constraint to a submap the job does not have, or without its path, changes nothing.
+  StoredConstraint dangling = registration;
+  dangling.constraint.to = 7;
+  EXPECT_THROW(f.results.save_constraints(f.job, {dangling}), DatabaseError);
+  StoredConstraint pathless = registration;
+  pathless.path = RegistrationPath::kNone;
+  EXPECT_THROW(f.results.save_constraints(f.job, {pathless}), std::invalid_argument);
+  EXPECT_EQ(f.results.load_constraints(f.job).size(), 2u);
+}
+
+TEST(ResultStore, PosesTilesAndReportsRoundTrip) {
+  JobFixture f;
+  f.results.save_submaps(f.job, {a_submap(0, false), a_submap(1, false)});
+  const std::vector<Eigen::Isometry3d> poses = {a_pose(0.1, 1, 2, 3), a_pose(-3.0, -4, 5.5, 6)};
+  f.results.save_optimized_poses(f.job, poses);
+  std::vector<Eigen::Isometry3d> loaded = f.results.load_optimized_poses(f.job);
+  ASSERT_EQ(loaded.size(), 2u);
+  for (int i = 0; i < 2; ++i) expect_same_pose(loaded[i], poses[i]);
+  EXPECT_THROW(f.results.save_optimized_poses(f.job, {poses[0], poses[1], poses[0]}), DatabaseError);  // no submap 2
+
+  const TileKey key{"geotiff", 3, -2, 7};
+  f.results.put_tile(f.job, key, {'I', 'I', 42, 0});
+  f.results.put_tile(f.job, key, {'I', 'I', 42, 0, 8});  // replaced
+  EXPECT_EQ(f.results.tile(f.job, key), (Bytes{'I', 'I', 42, 0, 8}));
+  EXPECT_EQ(f.results.tile(f.job, {"openvdb", 3, -2, 7}), std::nullopt);
+  EXPECT_THROW(f.results.put_tile(f.job, {"png", 0, 0, 0}, {}), std::invalid_argument);
+
+  Report report{{{"consistency", {{"rmse_m", 0.21}}}, {"configuration", "gicp"}},
+                {{"histogram.png", {0x89, 'P', 'N', 'G'}}, {"trajectory.png", {0x89, 'P'}}}};
+  f.results.save_report(f.job, report);
+  std::optional<Report> back = f.results.load_report(f.job);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->report, report.report);
+  EXPECT_EQ(back->plots, report.plots);
+  EXPECT_EQ(f.results.load_report(f.job + 1), std::nullopt);
+}
+
+TEST(ResultStore, DeletingASurveyRemovesEverythingUnderIt) {
+  JobFixture f;
+  // A second survey of another tenant, with the same kinds of rows, must survive.
+  const std::int64_t other = f.surveys.create_survey(f.surveys.create_tenant("other"), "pond", {{"nav.csv", {9}}});
+  const std::int64_t other_job = f.jobs.enqueue({other, "odometry"});
+  for (auto [survey, job] : {std::pair{f.survey, f.job}, std::pair{other, other_job}}) {
+    f.surveys.save_validation(survey, {true, nlohmann::json::array(), nullptr});
+    f.results.save_submaps(job, {a_submap(0, true), a_submap(1, true)});
+    StoredConstraint odometry;
+    odometry.constraint.to = 1;
+    f.results.save_constraints(job, {odometry});
+    f.results.save_optimized_poses(job, {a_pose(0, 0, 0, 0), a_pose(0, 1, 0, 0)});
+    f.results.put_tile(job, {"openvdb", 0, 0, 0}, {1});
+    f.results.save_report(job, {{{"ok", true}}, {{"plot.png", {1}}}});
+  }
+  std::optional<ClaimedJob> claimed = f.jobs.claim("w");
+  ASSERT_TRUE(claimed);
+  f.jobs.record_event(claimed->lease, "submaps", 0.1);
+
+  const std::vector<std::string> tables = {"survey_files", "survey_file_chunks", "survey_validations", "jobs",
+                                           "job_events", "submaps", "constraints", "optimized_poses", "tiles",
+                                           "reports", "report_plots"};
+  auto count = [&](const std::string& table) { return f.db.scalar("SELECT count(*) FROM " + table); };
+  std::map<std::string, long long> before;
+  for (const std::string& table : tables) before[table] = count(table);
+
+  EXPECT_TRUE(f.surveys.delete_survey(f.survey));
+  EXPECT_FALSE(f.surveys.delete_survey(f.survey));
+  EXPECT_EQ(count("surveys"), 1);
+  EXPECT_EQ(count("tenants"), 2);  // a tenant outlives its surveys
+  for (const std::string& table : tables) {
+    SCOPED_TRACE(table);
+    EXPECT_GT(before[table], count(table));
+    // ... while the other survey keeps its own.
+    if (table != "job_events") {
+      EXPECT_GT(count(table), 0);
+    }
+  }
+  EXPECT_EQ(f.results.load_submaps(f.job).size(), 0u);
+  EXPECT_EQ(f.results.load_submaps(other_job).size(), 2u);
+}
+
+}  // namespace
+}  // namespace bathyslam::storage

@@ -1,0 +1,125 @@
+// Surveys, their files and tenants' tokens.
+#include <gtest/gtest.h>
+
+#include "server/storage/survey_store.h"
+#include "tests/integration/fresh_database.h"
+
+namespace bathyslam::storage {
+namespace {
+
+Bytes bytes_of(const std::string& text) { return Bytes(text.begin(), text.end()); }
+
+long long rows_under_surveys(testing::FreshDatabase& db) {
+  return db.scalar("SELECT (SELECT count(*) FROM surveys) + (SELECT count(*) FROM survey_files)"
+                   " + (SELECT count(*) FROM survey_file_chunks)");
+}
+
+TEST(SurveyStore, FilesAreChunkedAndReassembledWithTheirHash) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool, 7);  // tiny chunks, so that every file spans several
+  const std::int64_t tenant = store.create_tenant("acme");
+  const Bytes nav = bytes_of("time,easting,northing,depth,roll,pitch,heading\n1,2,3,4,5,6,7\n");
+  const Bytes empty;
+  const std::int64_t survey = store.create_survey(tenant, "lake", {{"nav.csv", nav}, {"empty.txt", empty}});
+
+  std::vector<StoredFile> files = store.files(survey);
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files[1].name, "nav.csv");
+  EXPECT_EQ(files[1].size_bytes, static_cast<std::int64_t>(nav.size()));
+  EXPECT_EQ(files[1].chunk_count, static_cast<int>((nav.size() + 6) / 7));
+  EXPECT_EQ(files[1].sha256, sha256(nav));
+  EXPECT_EQ(files[0].chunk_count, 0);
+  EXPECT_EQ(hex(sha256(empty)), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(store.read_file(survey, "nav.csv"), nav);
+  EXPECT_EQ(store.read_file(survey, "empty.txt"), empty);
+  EXPECT_THROW(store.read_file(survey, "pings.csv"), std::out_of_range);
+
+  // Storage that no longer matches the upload is noticed, not served.
+  db.scalar("WITH c AS (UPDATE survey_file_chunks SET data = 'XXXXXXX' WHERE seq = 1 RETURNING 1) SELECT count(*) FROM c");
+  EXPECT_THROW(store.read_file(survey, "nav.csv"), std::runtime_error);
+}
+
+TEST(SurveyStore, ASurveyInsertThatFailsHalfwayLeavesNothing) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool, 4);
+  const std::int64_t tenant = store.create_tenant("acme");
+  // The second file collides with the first inside the database, after the survey row, the
+  // first file and its chunks are written.
+  try {
+    store.create_survey(tenant, "lake", {{"nav.csv", bytes_of("0123456789")}, {"nav.csv", bytes_of("again")}});
+    FAIL() << "a survey with two files of one name";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "23505");
+  }
+  EXPECT_EQ(rows_under_surveys(db), 0);
+  // The pool's connection is clean, and the same name can be used now.
+  EXPECT_GT(store.create_survey(tenant, "lake", {{"nav.csv", bytes_of("ok")}}), 0);
+}
+
+TEST(SurveyStore, BadNamesAreRefusedBeforeAnythingIsWritten) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t tenant = store.create_tenant("acme");
+  for (const char* name : {"../etc/passwd", "", ".hidden", "a b", "dir/file"})
+    EXPECT_THROW(store.create_survey(tenant, "lake", {{"ok.csv", {}}, {name, {}}}), std::invalid_argument) << name;
+  EXPECT_THROW(store.create_survey(tenant, "", {}), std::invalid_argument);
+  EXPECT_THROW(store.create_tenant(""), std::invalid_argument);
+  try {
+    store.create_survey(tenant + 99, "lake", {});
+    FAIL() << "a survey for a tenant that does not exist";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "23503");
+  }
+  EXPECT_EQ(rows_under_surveys(db), 0);
+}
+
+TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t acme = store.create_tenant("acme");
+  const std::int64_t other = store.create_tenant("other");
+  const std::string token = store.issue_token(acme, "ci");
+  const std::string second = store.issue_token(other, "laptop");
+  EXPECT_NE(token, second);
+  EXPECT_EQ(token.size(), 4u + 64u);
+  EXPECT_EQ(store.tenant_of_token(token), acme);
+  EXPECT_EQ(store.tenant_of_token(second), other);
+  EXPECT_EQ(store.tenant_of_token("bst_guess"), std::nullopt);
+  Connection connection(db.conninfo());
+  EXPECT_EQ(connection.exec("SELECT count(*) FROM api_tokens WHERE token_sha256 = sha256(convert_to($1, 'UTF8'))",
+                            {token}).int64(0, 0), 1);
+  EXPECT_EQ(connection.exec("SELECT count(*) FROM api_tokens WHERE position(convert_to($1, 'UTF8') IN token_sha256) > 0"
+                            " OR description = $1", {token}).int64(0, 0), 0);
+  EXPECT_TRUE(store.revoke_token(token));
+  EXPECT_FALSE(store.revoke_token(token));
+  EXPECT_EQ(store.tenant_of_token(token), std::nullopt);
+  EXPECT_EQ(store.tenant_of_token(second), other);
+}
+
+TEST(SurveyStore, TheLatestValidationIsKept) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "lake", {});
+  EXPECT_EQ(store.validation(survey), std::nullopt);
+  nlohmann::json problem = {{"file", "nav.csv"}, {"line", 5}, {"field", "easting"}, {"message", "not a number"}};
+  store.save_validation(survey, {false, nlohmann::json::array({problem}), nullptr});
+  std::optional<Validation> first = store.validation(survey);
+  ASSERT_TRUE(first);
+  EXPECT_FALSE(first->valid);
+  EXPECT_EQ(first->problems[0], problem);
+  EXPECT_TRUE(first->summary.is_null());
+  store.save_validation(survey, {true, nlohmann::json::array(), {{"pings", 1200}}});
+  std::optional<Validation> second = store.validation(survey);
+  ASSERT_TRUE(second);
+  EXPECT_TRUE(second->valid);
+  EXPECT_EQ(second->summary["pings"], 1200);
+  EXPECT_THROW(store.save_validation(survey, {true, nlohmann::json::object(), nullptr}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bathyslam::storage
