@@ -4,8 +4,13 @@
 
 namespace bathyslam::cli {
 
+// Offline.
 void add_simulate_command(CLI::App& app);
 void add_inspect_command(CLI::App& app);
 void add_process_command(CLI::App& app);
+// Against a server.
+void add_upload_command(CLI::App& app);
+void add_job_commands(CLI::App& app);  // submit, watch, jobs, report
+void add_map_commands(CLI::App& app);  // tiles, map
 
 }  // namespace bathyslam::cli

@@ -1,17 +1,42 @@
 #!/usr/bin/env bash
-# The README's main-job command. For now: build, simulate the `small` survey, summarise it and
-# process it offline with the `gicp` configuration. Later issues make it the full service round
-# trip (private PostgreSQL, server, upload, job, tiles).
+# The README's main-job command: the whole product on this machine. Builds, starts a private
+# PostgreSQL (scripts/pg.sh) and bathyslam-server, simulates the `small` survey, uploads it,
+# runs a `gicp` job (`mchs` once the core has it), watches it, saves the report and the map
+# tiles, prints where they are, and stops the server and PostgreSQL.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
 out=${BATHYSLAM_DEMO_DIR:-demo}
 mkdir -p "$out"
-./build/client/bathyslam simulate --scenario small --seed 1 --drift paper --out "$out/small"
-./build/client/bathyslam inspect "$out/small"
-./build/client/bathyslam inspect --json "$out/small" > "$out/small-summary.json"
-./build/client/bathyslam process "$out/small" --config gicp --out "$out/small-gicp"
+bin=./build
+pg="$out/pg"
+
+bash scripts/pg.sh start "$pg" > /dev/null
+url=$(bash scripts/pg.sh url "$pg")
+server_pid=""
+stop() {
+  [ -z "$server_pid" ] || { kill "$server_pid" 2> /dev/null || true; wait "$server_pid" 2> /dev/null || true; }
+  bash scripts/pg.sh stop "$pg" > /dev/null || true
+}
+trap stop EXIT
+"$bin/server/bathyslam-server" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant demo \
+  > "$out/server.out" 2> "$out/server.log" &
+server_pid=$!
+for _ in $(seq 100); do grep -q "listening" "$out/server.out" && break; sleep 0.1; done
+BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$out/server.out")
+[ -n "$BATHYSLAM_SERVER" ] || { cat "$out/server.log" >&2; exit 1; }
+export BATHYSLAM_SERVER
+
+"$bin/client/bathyslam" simulate --scenario small --seed 1 --drift paper --out "$out/small"
+"$bin/client/bathyslam" inspect --json "$out/small" > "$out/small-summary.json"
+survey=$("$bin/client/bathyslam" upload "$out/small" | awk '/^survey/ {print $2}')
+job=$("$bin/client/bathyslam" submit "$survey" --config gicp | awk '/^job/ {print $2}')
+"$bin/client/bathyslam" watch "$job"
+mkdir -p "$out/job-$job"
+"$bin/client/bathyslam" report "$job" --out "$out/job-$job" | tee "$out/job-$job/report.txt"
+"$bin/client/bathyslam" tiles "$job" --out "$out/job-$job/tiles"
 echo
-echo "bundle:  $out/small"
-echo "summary: $out/small-summary.json"
-echo "slam:    $out/small-gicp (trajectory.csv, report.json, plots)"
+echo "bundle:      $out/small (summary $out/small-summary.json)"
+echo "report:      $out/job-$job (report.txt, report.json, *.png)"
+echo "tiles:       $out/job-$job/tiles (empty until map fusion lands)"
+echo "server log:  $out/server.log; database: $pg (bash scripts/pg.sh start $pg to look inside)"

@@ -1,6 +1,9 @@
-// bathyslam-server: a gRPC server with health checking and reflection, in front of PostgreSQL
-// (checked for a schema this binary understands at start); the survey, job and map services
-// arrive with the service issues. `bathyslam-server migrate` brings a database's schema up to date.
+// bathyslam-server: the survey, job and map services (gRPC, with health checking and
+// reflection) and a scheduler of job workers, in front of PostgreSQL (checked for a schema this
+// binary understands at start). `bathyslam-server migrate` brings a database's schema up to
+// date; `bathyslam-server token` issues an API token.
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -12,11 +15,17 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/grpcpp.h>
 
+#include "server/log.h"
+#include "server/scheduler/scheduler.h"
+#include "server/services/job_service.h"
+#include "server/services/map_service.h"
+#include "server/services/survey_service.h"
 #include "server/storage/migrations.h"
 
 namespace {
 
 namespace storage = bathyslam::storage;
+namespace service = bathyslam::server;
 
 int run_migrate(const std::string& db) {
   storage::Connection connection(db);
@@ -33,36 +42,47 @@ int run_migrate(const std::string& db) {
   return 0;
 }
 
-}  // namespace
+// The tenant called `name`, created on first use.
+std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& surveys, const std::string& name) {
+  {
+    auto connection = pool.acquire();  // given back before create_tenant borrows one
+    storage::Result row = connection->exec("SELECT id FROM tenants WHERE name = $1", {name});
+    if (row.rows() == 1) return row.int64(0, 0);
+  }
+  return surveys.create_tenant(name);
+}
 
-int main(int argc, char** argv) {
-  CLI::App app{"bathyslam-server: the bathyslam gRPC service"};
-  std::string listen = "127.0.0.1:50051";
-  app.add_option("--listen", listen, "address to listen on")->capture_default_str()
-      ->envname("BATHYSLAM_LISTEN");
+int run_token(const std::string& db, const std::string& tenant, const std::string& description) {
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, tenant), description).c_str());
+  return 0;
+}
+
+struct ServeOptions {
+  std::string listen;
   std::string db;
-  auto add_db_option = [&db](CLI::App* command) {
-    command->add_option("--db", db, "PostgreSQL connection string (libpq keywords or a postgresql:// URI)")
-        ->envname("BATHYSLAM_DB");
-  };
-  add_db_option(&app);
-  bool apply_migrations = false;
-  app.add_flag("--migrate", apply_migrations, "apply pending schema migrations at start");
-  CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");
-  add_db_option(migrate);  // `migrate --db ...` as well as `--db ... migrate`
-  CLI11_PARSE(app, argc, argv);
-  if (db.empty()) {
-    std::fprintf(stderr, "bathyslam-server: no database; pass --db or set BATHYSLAM_DB\n");
-    return 2;
-  }
-  try {
-    if (*migrate) return run_migrate(db);
-    storage::Connection connection(db);
-    storage::ensure_schema(connection, apply_migrations);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "bathyslam-server: %s\n", error.what());
-    return 1;
-  }
+  bool migrate = false;
+  int workers = 1;
+  std::string dev_tenant;
+  std::string scratch;
+  int lease_seconds = 30;
+  service::Limits limits;
+};
+
+int serve(const ServeOptions& o) {
+  storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers));
+  storage::SurveyStore surveys(pool);
+  storage::JobQueue jobs(pool, {std::chrono::seconds(o.lease_seconds), std::chrono::seconds(5)});
+  storage::ResultStore results(pool);
+  service::ServiceContext context{surveys, jobs, results, o.limits, std::nullopt};
+  if (!o.dev_tenant.empty()) context.dev_tenant = tenant_named(pool, surveys, o.dev_tenant);
+  const std::filesystem::path scratch =
+      o.scratch.empty() ? std::filesystem::temp_directory_path() / ("bathyslam-server-" + std::to_string(getpid()))
+                        : std::filesystem::path(o.scratch);
+  service::SurveyService survey_service(context, scratch);
+  service::JobService job_service(context);
+  service::MapService map_service(context);
 
   // Block the stop signals in every thread; one thread waits for them and shuts down cleanly.
   sigset_t stop_signals;
@@ -75,21 +95,91 @@ int main(int argc, char** argv) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&survey_service);
+  builder.RegisterService(&job_service);
+  builder.RegisterService(&map_service);
+  builder.SetMaxReceiveMessageSize(2 << 20);  // a 1 MiB chunk and its envelope
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
-    std::fprintf(stderr, "bathyslam-server: cannot listen on %s\n", listen.c_str());
+    std::fprintf(stderr, "bathyslam-server: cannot listen on %s\n", o.listen.c_str());
     return 1;
   }
+  char host[256] = "bathyslam";
+  gethostname(host, sizeof host - 1);
+  service::Scheduler scheduler(surveys, jobs, results,
+                              {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
+                               .scratch = scratch});
+  scheduler.start();
   std::thread stopper([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
-    std::printf("bathyslam-server: signal %d, shutting down\n", signal);
-    server->Shutdown();
+    service::log("signal %d, shutting down", signal);
+    server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
   });
-  std::printf("bathyslam-server listening on %s\n", listen.c_str());
+  // The port actually bound (":0" asks for any free one): tests and scripts read it here.
+  const std::string address = o.listen.substr(0, o.listen.rfind(':')) + ":" + std::to_string(port);
+  std::printf("bathyslam-server listening on %s\n", address.c_str());
   std::fflush(stdout);
+  service::log("listening on %s; %d workers; %s", address.c_str(), o.workers,
+              context.dev_tenant ? ("callers without a token act as tenant '" + o.dev_tenant + "'").c_str()
+                                 : "an API token is required");
   server->Wait();
   stopper.join();
+  scheduler.stop();
+  std::error_code ignored;
+  if (o.scratch.empty()) std::filesystem::remove_all(scratch, ignored);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"bathyslam-server: the bathyslam gRPC service"};
+  ServeOptions o;
+  o.listen = "127.0.0.1:50051";
+  app.add_option("--listen", o.listen, "address to listen on (port 0: any free port)")->capture_default_str()
+      ->envname("BATHYSLAM_LISTEN");
+  auto add_db_option = [&o](CLI::App* command) {
+    command->add_option("--db", o.db, "PostgreSQL connection string (libpq keywords or a postgresql:// URI)")
+        ->envname("BATHYSLAM_DB");
+  };
+  add_db_option(&app);
+  app.add_flag("--migrate", o.migrate, "apply pending schema migrations at start");
+  app.add_option("--workers", o.workers, "job workers (0: serve the API only)")->capture_default_str()
+      ->check(CLI::Range(0, 256))->envname("BATHYSLAM_WORKERS");
+  app.add_option("--dev-tenant", o.dev_tenant, "callers without a token act as this tenant (created if needed)")
+      ->envname("BATHYSLAM_DEV_TENANT");
+  app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
+  app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
+      ->capture_default_str()->check(CLI::Range(5, 3600));
+  app.add_option("--max-file-bytes", o.limits.max_file_bytes, "largest uploaded file")->capture_default_str();
+  app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")
+      ->capture_default_str()->check(CLI::Range(1, 10));
+  CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");
+  add_db_option(migrate);  // `migrate --db ...` as well as `--db ... migrate`
+  CLI::App* token = app.add_subcommand("token", "issue an API token for a tenant (created if needed) and print it");
+  add_db_option(token);
+  std::string tenant, description;
+  token->add_option("--tenant", tenant, "tenant name")->required();
+  token->add_option("--description", description, "what the token is for");
+  CLI11_PARSE(app, argc, argv);
+  if (o.db.empty()) {
+    std::fprintf(stderr, "bathyslam-server: no database; pass --db or set BATHYSLAM_DB\n");
+    return 2;
+  }
+  try {
+    if (*migrate) return run_migrate(o.db);
+    {
+      storage::Connection connection(o.db);
+      storage::ensure_schema(connection, o.migrate);
+    }
+    if (*token) return run_token(o.db, tenant, description);
+    return serve(o);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "bathyslam-server: %s\n", error.what());
+    return 1;
+  }
 }

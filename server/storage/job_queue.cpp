@@ -205,4 +205,57 @@ JobStatus JobQueue::status(std::int64_t job_id) {
           row.optional_text(0, 7)};
 }
 
+namespace {
+
+constexpr std::string_view kJobColumns =
+    "SELECT j.id, j.survey_id, s.tenant_id, j.configuration, j.state, j.attempts, j.error, j.parameters,"
+    " extract(epoch FROM j.created_at)::float8, coalesce(extract(epoch FROM j.started_at)::float8, 0),"
+    " coalesce(extract(epoch FROM j.finished_at)::float8, 0), coalesce(e.stage, ''), coalesce(e.progress, 0)"
+    " FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+    " LEFT JOIN LATERAL (SELECT stage, progress FROM job_events WHERE job_id = j.id ORDER BY id DESC LIMIT 1) e ON true";
+
+std::vector<JobRecord> job_records(const Result& rows) {
+  std::vector<JobRecord> jobs;
+  for (int row = 0; row < rows.rows(); ++row)
+    jobs.push_back({rows.int64(row, 0), rows.int64(row, 1), rows.int64(row, 2), std::string(rows.text(row, 3)),
+                    parse_job_state(rows.text(row, 4)), static_cast<int>(rows.int64(row, 5)), rows.optional_text(row, 6),
+                    nlohmann::json::parse(rows.text(row, 7)), rows.float8(row, 8), rows.float8(row, 9),
+                    rows.float8(row, 10), std::string(rows.text(row, 11)), rows.float8(row, 12)});
+  return jobs;
+}
+
+}  // namespace
+
+std::optional<JobRecord> JobQueue::job(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  std::vector<JobRecord> found = job_records(connection->exec(std::string(kJobColumns) + " WHERE j.id = $1", {job_id}));
+  if (found.empty()) return std::nullopt;
+  return found.front();
+}
+
+std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional<std::int64_t> survey_id,
+                                           std::int64_t before_id, int limit) {
+  auto connection = pool_.acquire();
+  return job_records(connection->exec(
+      std::string(kJobColumns) +
+          " WHERE s.tenant_id = $1 AND ($2::bigint IS NULL OR j.survey_id = $2) AND ($3::bigint = 0 OR j.id < $3)"
+          " ORDER BY j.id DESC LIMIT $4",
+      {tenant_id, survey_id, before_id, limit}));
+}
+
+std::vector<StoredJobEvent> JobQueue::events_after(std::int64_t job_id, std::int64_t after_event_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT id, attempt, stage, progress, message, extract(epoch FROM at)::float8 FROM job_events"
+      " WHERE job_id = $1 AND id > $2 ORDER BY id",
+      {job_id, after_event_id});
+  std::vector<StoredJobEvent> events;
+  for (int row = 0; row < rows.rows(); ++row)
+    events.push_back({rows.int64(row, 0),
+                      {static_cast<int>(rows.int64(row, 1)), std::string(rows.text(row, 2)), rows.float8(row, 3),
+                       std::string(rows.text(row, 4))},
+                      rows.float8(row, 5)});
+  return events;
+}
+
 }  // namespace bathyslam::storage

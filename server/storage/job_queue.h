@@ -65,6 +65,28 @@ struct JobEvent {
   std::string message;
 };
 
+// A job as the API shows it: its row, the tenant of its survey and its latest event.
+struct JobRecord {
+  std::int64_t id = 0;
+  std::int64_t survey_id = 0;
+  std::int64_t tenant_id = 0;
+  std::string configuration;
+  JobState state = JobState::kQueued;
+  int attempts = 0;
+  std::optional<std::string> error;
+  nlohmann::json parameters;
+  double created_at = 0, started_at = 0, finished_at = 0;  // seconds since the epoch; 0: not yet
+  std::string stage;                                        // of the latest event, "" before any
+  double progress = 0;
+};
+
+// An event with its id (WatchJob resumes after the last id it sent) and time.
+struct StoredJobEvent {
+  std::int64_t id = 0;
+  JobEvent event;
+  double at = 0;  // seconds since the epoch
+};
+
 class JobQueue {
  public:
   explicit JobQueue(ConnectionPool& pool, QueueOptions options = {});
@@ -94,6 +116,12 @@ class JobQueue {
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
   std::vector<JobEvent> events(std::int64_t job_id);
   JobStatus status(std::int64_t job_id);  // throws std::out_of_range for an unknown id
+
+  std::optional<JobRecord> job(std::int64_t job_id);
+  // A tenant's jobs, newest first, below `before_id` (0: from the newest), of one survey or all.
+  std::vector<JobRecord> list_jobs(std::int64_t tenant_id, std::optional<std::int64_t> survey_id,
+                                   std::int64_t before_id, int limit);
+  std::vector<StoredJobEvent> events_after(std::int64_t job_id, std::int64_t after_event_id);
 
  private:
   bool finish(const Lease& lease, JobState state, const std::optional<std::string>& error);

@@ -220,8 +220,8 @@ std::vector<Eigen::Isometry3d> ResultStore::load_optimized_poses(std::int64_t jo
 }
 
 void ResultStore::put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data) {
-  if (key.format != "geotiff" && key.format != "openvdb")
-    throw std::invalid_argument("tile format '" + key.format + "': geotiff or openvdb");
+  if (key.format != "geotiff" && key.format != "openvdb" && key.format != "png" && key.format != "cog")
+    throw std::invalid_argument("tile format '" + key.format + "': geotiff, openvdb, png or cog");
   if (key.level < 0) throw std::invalid_argument("tile level must be non-negative");
   auto connection = pool_.acquire();
   connection->exec(
@@ -237,6 +237,61 @@ std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) 
       {job_id, key.format, key.level, key.col, key.row});
   if (row.rows() == 0) return std::nullopt;
   return row.bytes(0, 0);
+}
+
+std::vector<SubmapPose> ResultStore::submap_poses(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec("SELECT idx, time_mid, dr_pose FROM submaps WHERE job_id = $1 ORDER BY idx", {job_id});
+  std::vector<SubmapPose> poses;
+  for (int row = 0; row < rows.rows(); ++row)
+    poses.push_back({static_cast<int>(rows.int64(row, 0)), rows.float8(row, 1), parse_pose(rows.text(row, 2))});
+  return poses;
+}
+
+std::vector<TileKey> ResultStore::tiles(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT format, level, tile_col, tile_row FROM tiles WHERE job_id = $1 ORDER BY level, tile_row, tile_col, format",
+      {job_id});
+  std::vector<TileKey> keys;
+  for (int row = 0; row < rows.rows(); ++row)
+    keys.push_back({std::string(rows.text(row, 0)), static_cast<int>(rows.int64(row, 1)),
+                    static_cast<int>(rows.int64(row, 2)), static_cast<int>(rows.int64(row, 3))});
+  return keys;
+}
+
+void ResultStore::save_map_grid(std::int64_t job_id, const MapGrid& g) {
+  auto connection = pool_.acquire();
+  connection->exec(
+      "INSERT INTO maps (job_id, epsg, resolution_m, min_easting, min_northing, max_easting, max_northing,"
+      " tile_size_cells, levels) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
+      {job_id, g.epsg, g.resolution_m, g.min_easting, g.min_northing, g.max_easting, g.max_northing, g.tile_size_cells,
+       g.levels});
+}
+
+std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(
+      "SELECT epsg, resolution_m, min_easting, min_northing, max_easting, max_northing, tile_size_cells, levels"
+      " FROM maps WHERE job_id = $1",
+      {job_id});
+  if (row.rows() == 0) return std::nullopt;
+  return MapGrid{static_cast<int>(row.int64(0, 0)), row.float8(0, 1), row.float8(0, 2), row.float8(0, 3),
+                 row.float8(0, 4), row.float8(0, 5), static_cast<int>(row.int64(0, 6)), static_cast<int>(row.int64(0, 7))};
+}
+
+void ResultStore::save_origin(std::int64_t job_id, const LocalOrigin& origin) {
+  auto connection = pool_.acquire();
+  connection->exec("UPDATE jobs SET origin_easting = $2, origin_northing = $3 WHERE id = $1",
+                   {job_id, origin.easting, origin.northing});
+}
+
+std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(
+      "SELECT origin_easting, origin_northing FROM jobs WHERE id = $1 AND origin_easting IS NOT NULL", {job_id});
+  if (row.rows() == 0) return std::nullopt;
+  return LocalOrigin{row.float8(0, 0), row.float8(0, 1)};
 }
 
 void ResultStore::save_report(std::int64_t job_id, const Report& report) {

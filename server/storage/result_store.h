@@ -31,6 +31,22 @@ struct TileKey {
   int row = 0;
 };
 
+// The tile grid of a job's map (table maps), written by the tiling stage.
+struct MapGrid {
+  int epsg = 0;
+  double resolution_m = 0;
+  double min_easting = 0, min_northing = 0, max_easting = 0, max_northing = 0;
+  int tile_size_cells = 0;
+  int levels = 0;
+};
+
+// A submap's time and DR pose without its points: what a trajectory needs.
+struct SubmapPose {
+  int index = 0;
+  double time_mid = 0;
+  Eigen::Isometry3d dr_pose = Eigen::Isometry3d::Identity();
+};
+
 struct Report {
   nlohmann::json report;
   std::map<std::string, Bytes> plots;  // name -> PNG
@@ -44,6 +60,7 @@ class ResultStore {
   // the job already has those rows.
   void save_submaps(std::int64_t job_id, const std::vector<Submap>& submaps);
   std::vector<Submap> load_submaps(std::int64_t job_id);  // by index
+  std::vector<SubmapPose> submap_poses(std::int64_t job_id);  // by index
   // Submaps whose DR footprint meets the rectangle (map frame): the lookup of tiling.
   std::vector<int> submaps_overlapping(std::int64_t job_id, const Eigen::AlignedBox2d& area);
 
@@ -55,6 +72,14 @@ class ResultStore {
 
   void put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data);  // replaces the same key
   std::optional<Bytes> tile(std::int64_t job_id, const TileKey& key);
+  std::vector<TileKey> tiles(std::int64_t job_id);  // every stored tile, without its bytes
+
+  void save_map_grid(std::int64_t job_id, const MapGrid& grid);
+  std::optional<MapGrid> map_grid(std::int64_t job_id);
+
+  // The map frame's origin of the job's poses (the CRS minus this).
+  void save_origin(std::int64_t job_id, const LocalOrigin& origin);
+  std::optional<LocalOrigin> origin(std::int64_t job_id);
 
   void save_report(std::int64_t job_id, const Report& report);
   std::optional<Report> load_report(std::int64_t job_id);

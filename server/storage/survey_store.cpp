@@ -4,6 +4,7 @@
 #include <openssl/rand.h>
 
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
 
 namespace bathyslam::storage {
@@ -20,6 +21,63 @@ bool plain_file_name(const std::string& name) {
 }
 
 Bytes digest_bytes(const Sha256& digest) { return Bytes(digest.begin(), digest.end()); }
+
+// SHA-256 over data that arrives in pieces (a file read back chunk by chunk).
+class Sha256Stream {
+ public:
+  Sha256Stream() : context_(EVP_MD_CTX_new(), &EVP_MD_CTX_free) {
+    if (!context_ || !EVP_DigestInit_ex(context_.get(), EVP_sha256(), nullptr)) throw std::runtime_error("SHA-256 failed");
+  }
+  void add(const Bytes& bytes) {
+    if (!EVP_DigestUpdate(context_.get(), bytes.data(), bytes.size())) throw std::runtime_error("SHA-256 failed");
+  }
+  Sha256 finish() {
+    Sha256 digest{};
+    unsigned int length = 0;
+    if (!EVP_DigestFinal_ex(context_.get(), digest.data(), &length) || length != 32) throw std::runtime_error("SHA-256 failed");
+    return digest;
+  }
+
+ private:
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context_;
+};
+
+Sha256 to_sha256(const Bytes& bytes) {
+  Sha256 digest{};
+  std::copy_n(bytes.begin(), std::min(bytes.size(), digest.size()), digest.begin());
+  return digest;
+}
+
+// Reads a file's chunks in order, one round trip each (memory: one chunk), into `sink`.
+template <typename Sink>
+void for_each_chunk(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, const std::string& name,
+                    Sink&& sink) {
+  for (std::int64_t seq = 0; seq < chunk_count; ++seq) {
+    Result chunk = connection.exec("SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq = $2", {file_id, seq});
+    if (chunk.rows() == 0) throw std::runtime_error("survey file '" + name + "': chunk " + std::to_string(seq) + " is missing");
+    sink(chunk.bytes(0, 0));
+  }
+}
+
+constexpr std::string_view kSurveyColumns =
+    "SELECT s.id, s.tenant_id, s.name, s.crs, s.sonar, s.vehicle, coalesce(v.valid, false)"
+    " FROM surveys s LEFT JOIN survey_validations v ON v.survey_id = s.id";
+
+std::vector<SurveyRecord> survey_records(const Result& rows) {
+  std::vector<SurveyRecord> surveys;
+  for (int row = 0; row < rows.rows(); ++row)
+    surveys.push_back({rows.int64(row, 0), rows.int64(row, 1), std::string(rows.text(row, 2)),
+                       std::string(rows.text(row, 3)), nlohmann::json::parse(rows.text(row, 4)),
+                       nlohmann::json::parse(rows.text(row, 5)), rows.boolean(row, 6)});
+  return surveys;
+}
+
+constexpr std::string_view kUploadColumns = "SELECT name, size_bytes, committed_bytes, complete, sha256 FROM survey_files";
+
+UploadState upload_row(const Result& rows, int row) {
+  return {std::string(rows.text(row, 0)), rows.int64(row, 1), rows.int64(row, 2), rows.boolean(row, 3),
+          to_sha256(rows.bytes(row, 4))};
+}
 
 Bytes token_hash(const std::string& token) { return digest_bytes(sha256(Bytes(token.begin(), token.end()))); }
 
@@ -96,8 +154,8 @@ std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::strin
     const std::size_t chunks = (file.content.size() + chunk_bytes_ - 1) / chunk_bytes_;
     std::int64_t file_id =
         connection
-            ->exec("INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count)"
-                   " VALUES ($1, $2, $3, $4, $5) RETURNING id",
+            ->exec("INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"
+                   " VALUES ($1, $2, $3, $4, $5, $3, true) RETURNING id",
                    {survey_id, file.name, file.content.size(), digest_bytes(sha256(file.content)), chunks})
             .int64(0, 0);
     for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
@@ -118,11 +176,8 @@ std::vector<StoredFile> SurveyStore::files(std::int64_t survey_id) {
       {survey_id});
   std::vector<StoredFile> files;
   for (int row = 0; row < rows.rows(); ++row) {
-    StoredFile file{rows.int64(row, 0), std::string(rows.text(row, 1)), rows.int64(row, 2), {},
-                    static_cast<int>(rows.int64(row, 4))};
-    Bytes digest = rows.bytes(row, 3);
-    std::copy_n(digest.begin(), std::min(digest.size(), file.sha256.size()), file.sha256.begin());
-    files.push_back(std::move(file));
+    files.push_back({rows.int64(row, 0), std::string(rows.text(row, 1)), rows.int64(row, 2),
+                     to_sha256(rows.bytes(row, 3)), static_cast<int>(rows.int64(row, 4))});
   }
   return files;
 }
@@ -130,20 +185,14 @@ std::vector<StoredFile> SurveyStore::files(std::int64_t survey_id) {
 Bytes SurveyStore::read_file(std::int64_t survey_id, const std::string& name) {
   auto connection = pool_.acquire();
   Result file = connection->exec(
-      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2",
+      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
       {survey_id, name});
   if (file.rows() == 0)
     throw std::out_of_range("survey " + std::to_string(survey_id) + " has no file '" + name + "'");
   Bytes content;
   content.reserve(static_cast<std::size_t>(file.int64(0, 1)));
-  // One chunk per round trip keeps memory at one chunk beyond the result.
-  for (std::int64_t seq = 0; seq < file.int64(0, 3); ++seq) {
-    Result chunk = connection->exec("SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq = $2",
-                                    {file.int64(0, 0), seq});
-    if (chunk.rows() == 0) throw std::runtime_error("survey file '" + name + "': chunk " + std::to_string(seq) + " is missing");
-    Bytes data = chunk.bytes(0, 0);
-    content.insert(content.end(), data.begin(), data.end());
-  }
+  for_each_chunk(*connection, file.int64(0, 0), file.int64(0, 3), name,
+                 [&](const Bytes& data) { content.insert(content.end(), data.begin(), data.end()); });
   if (static_cast<std::int64_t>(content.size()) != file.int64(0, 1) || digest_bytes(sha256(content)) != file.bytes(0, 2))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
   return content;
@@ -173,6 +222,159 @@ std::optional<Validation> SurveyStore::validation(std::int64_t survey_id) {
 bool SurveyStore::delete_survey(std::int64_t survey_id) {
   auto connection = pool_.acquire();
   return connection->exec("DELETE FROM surveys WHERE id = $1", {survey_id}).affected() == 1;
+}
+
+std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::string& name, const std::string& crs,
+                                        const nlohmann::json& sonar, const nlohmann::json& vehicle) {
+  if (name.empty()) throw std::invalid_argument("name: a survey needs a name");
+  if (!sonar.is_object() || !vehicle.is_object()) throw std::invalid_argument("sonar and vehicle must be JSON objects");
+  auto connection = pool_.acquire();
+  try {
+    return connection
+        ->exec("INSERT INTO surveys (tenant_id, name, crs, sonar, vehicle) VALUES ($1, $2, $3, $4, $5) RETURNING id",
+               {tenant_id, name, crs, sonar.dump(), vehicle.dump()})
+        .int64(0, 0);
+  } catch (const DatabaseError& error) {
+    if (error.sqlstate() == "23505") throw std::invalid_argument("name: a survey named '" + name + "' exists already");
+    throw;
+  }
+}
+
+std::optional<SurveyRecord> SurveyStore::survey(std::int64_t survey_id) {
+  auto connection = pool_.acquire();
+  std::vector<SurveyRecord> found =
+      survey_records(connection->exec(std::string(kSurveyColumns) + " WHERE s.id = $1", {survey_id}));
+  if (found.empty()) return std::nullopt;
+  return found.front();
+}
+
+std::vector<SurveyRecord> SurveyStore::list_surveys(std::int64_t tenant_id, std::int64_t after_id, int limit,
+                                                    const std::optional<std::string>& name) {
+  auto connection = pool_.acquire();
+  return survey_records(connection->exec(std::string(kSurveyColumns) +
+                                             " WHERE s.tenant_id = $1 AND s.id > $2 AND ($4::text IS NULL OR s.name = $4)"
+                                             " ORDER BY s.id LIMIT $3",
+                                         {tenant_id, after_id, limit, name}));
+}
+
+UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string& name, std::int64_t size_bytes,
+                                      const Sha256& digest) {
+  if (!plain_file_name(name))
+    throw UploadError(UploadError::Kind::kInvalid, "file_name: '" + name +
+                                                       "': use letters, digits, '.', '_' and '-', starting with a letter or digit");
+  if (size_bytes < 0) throw UploadError(UploadError::Kind::kInvalid, "size_bytes: must not be negative");
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  // Locks the survey row: two uploads of the same file cannot both create it.
+  Result survey = connection->exec(
+      "SELECT coalesce(v.valid, false) FROM surveys s LEFT JOIN survey_validations v ON v.survey_id = s.id"
+      " WHERE s.id = $1 FOR UPDATE OF s",
+      {survey_id});
+  if (survey.rows() == 0) throw UploadError(UploadError::Kind::kNotFound, "no survey " + std::to_string(survey_id));
+  if (survey.boolean(0, 0))
+    throw UploadError(UploadError::Kind::kFinalized, "survey " + std::to_string(survey_id) + " is finalized: its files are fixed");
+  Result existing = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 AND name = $2", {survey_id, name});
+  if (existing.rows() == 1) {
+    UploadState state = upload_row(existing, 0);
+    if (state.size_bytes == size_bytes && state.sha256 == digest) return state;  // a resumed upload
+    connection->exec("DELETE FROM survey_files WHERE survey_id = $1 AND name = $2", {survey_id, name});
+  }
+  Result created = connection->exec(
+      "INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"
+      " VALUES ($1, $2, $3, $4, 0, 0, false) RETURNING name, size_bytes, committed_bytes, complete, sha256",
+      {survey_id, name, size_bytes, digest_bytes(digest)});
+  UploadState state = upload_row(created, 0);
+  transaction.commit();
+  if (size_bytes == 0) return append_chunk(survey_id, name, 0, {});  // nothing to wait for: verify now
+  return state;
+}
+
+UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset,
+                                      const Bytes& data) {
+  if (data.size() > chunk_bytes_)
+    throw UploadError(UploadError::Kind::kInvalid,
+                      "data: a chunk holds at most " + std::to_string(chunk_bytes_) + " bytes, got " + std::to_string(data.size()));
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  Result file = connection->exec(
+      "SELECT f.id, f.size_bytes, f.committed_bytes, f.complete, f.sha256, f.chunk_count, coalesce(v.valid, false)"
+      " FROM survey_files f LEFT JOIN survey_validations v ON v.survey_id = f.survey_id"
+      " WHERE f.survey_id = $1 AND f.name = $2 FOR UPDATE OF f",
+      {survey_id, name});
+  if (file.rows() == 0)
+    throw UploadError(UploadError::Kind::kNotFound, "survey " + std::to_string(survey_id) + " has no upload of '" + name + "'");
+  const std::int64_t file_id = file.int64(0, 0), size = file.int64(0, 1), committed = file.int64(0, 2);
+  const std::int64_t chunks = file.int64(0, 5);
+  if (file.boolean(0, 6)) throw UploadError(UploadError::Kind::kFinalized, "survey " + std::to_string(survey_id) + " is finalized");
+  if (file.boolean(0, 3)) throw UploadError(UploadError::Kind::kConflict, "'" + name + "' is complete already");
+  if (offset != committed)
+    throw UploadError(UploadError::Kind::kBadOffset, "offset: " + std::to_string(offset) + " but " +
+                                                         std::to_string(committed) + " bytes of '" + name +
+                                                         "' are committed; resume there");
+  const std::int64_t now_committed = committed + static_cast<std::int64_t>(data.size());
+  if (now_committed > size)
+    throw UploadError(UploadError::Kind::kInvalid, "data: '" + name + "' was declared " + std::to_string(size) +
+                                                       " bytes; this chunk would end at " + std::to_string(now_committed));
+  std::int64_t chunk_count = chunks;
+  if (!data.empty()) {
+    connection->exec("INSERT INTO survey_file_chunks (file_id, seq, data) VALUES ($1, $2, $3)", {file_id, chunks, data});
+    ++chunk_count;
+  }
+  bool complete = false;
+  if (now_committed == size) {
+    Sha256Stream digest;
+    for_each_chunk(*connection, file_id, chunk_count, name, [&](const Bytes& bytes) { digest.add(bytes); });
+    const Sha256 received = digest.finish();
+    if (received != to_sha256(file.bytes(0, 4))) {
+      // Discarded and committed before throwing, so that a retry starts from zero.
+      connection->exec("DELETE FROM survey_file_chunks WHERE file_id = $1", {file_id});
+      connection->exec("UPDATE survey_files SET committed_bytes = 0, chunk_count = 0 WHERE id = $1", {file_id});
+      transaction.commit();
+      throw UploadError(UploadError::Kind::kChecksum,
+                        "sha256: the " + std::to_string(size) + " bytes received of '" + name + "' hash to " + hex(received) +
+                            ", not the declared " + hex(to_sha256(file.bytes(0, 4))) + "; the upload was discarded");
+    }
+    complete = true;
+  }
+  Result updated = connection->exec(
+      "UPDATE survey_files SET committed_bytes = $2, chunk_count = $3, complete = $4 WHERE id = $1"
+      " RETURNING name, size_bytes, committed_bytes, complete, sha256",
+      {file_id, now_committed, chunk_count, complete});
+  transaction.commit();
+  return upload_row(updated, 0);
+}
+
+std::optional<UploadState> SurveyStore::upload_state(std::int64_t survey_id, const std::string& name) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 AND name = $2", {survey_id, name});
+  if (row.rows() == 0) return std::nullopt;
+  return upload_row(row, 0);
+}
+
+std::vector<UploadState> SurveyStore::uploads(std::int64_t survey_id) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 ORDER BY name", {survey_id});
+  std::vector<UploadState> states;
+  for (int row = 0; row < rows.rows(); ++row) states.push_back(upload_row(rows, row));
+  return states;
+}
+
+void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, std::ostream& out) {
+  auto connection = pool_.acquire();
+  Result file = connection->exec(
+      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
+      {survey_id, name});
+  if (file.rows() == 0) throw std::out_of_range("survey " + std::to_string(survey_id) + " has no complete file '" + name + "'");
+  Sha256Stream digest;
+  std::int64_t size = 0;
+  for_each_chunk(*connection, file.int64(0, 0), file.int64(0, 3), name, [&](const Bytes& data) {
+    digest.add(data);
+    size += static_cast<std::int64_t>(data.size());
+    out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
+  });
+  if (!out) throw std::runtime_error("survey file '" + name + "': cannot write the copy");
+  if (size != file.int64(0, 1) || digest.finish() != to_sha256(file.bytes(0, 2)))
+    throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
 }
 
 }  // namespace bathyslam::storage

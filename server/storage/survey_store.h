@@ -4,6 +4,8 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <ostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,6 +32,37 @@ struct StoredFile {
   int chunk_count = 0;
 };
 
+// A survey as CreateSurvey declared it; ready once a validation found no error.
+struct SurveyRecord {
+  std::int64_t id = 0;
+  std::int64_t tenant_id = 0;
+  std::string name;
+  std::string crs;
+  nlohmann::json sonar = nlohmann::json::object();
+  nlohmann::json vehicle = nlohmann::json::object();
+  bool ready = false;
+};
+
+// One file's upload: declared size and SHA-256, and how much of it is stored.
+struct UploadState {
+  std::string name;
+  std::int64_t size_bytes = 0;
+  std::int64_t committed_bytes = 0;
+  bool complete = false;
+  Sha256 sha256{};
+};
+
+// Why an upload step was refused; the service turns the kind into a status code.
+class UploadError : public std::runtime_error {
+ public:
+  enum class Kind { kNotFound, kFinalized, kConflict, kBadOffset, kChecksum, kInvalid };
+  UploadError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
+  Kind kind() const { return kind_; }
+
+ private:
+  Kind kind_;
+};
+
 struct Validation {
   bool valid = false;
   nlohmann::json problems = nlohmann::json::array();
@@ -53,6 +86,27 @@ class SurveyStore {
   // Throws std::invalid_argument for a bad name before touching the database.
   std::int64_t create_survey(std::int64_t tenant_id, const std::string& name, const std::vector<FileUpload>& files);
   std::vector<StoredFile> files(std::int64_t survey_id);
+
+  // An empty survey, its files to be uploaded one by one. Throws std::invalid_argument for an
+  // empty name or a name the tenant already uses.
+  std::int64_t create_survey(std::int64_t tenant_id, const std::string& name, const std::string& crs,
+                             const nlohmann::json& sonar, const nlohmann::json& vehicle);
+  std::optional<SurveyRecord> survey(std::int64_t survey_id);
+  // A tenant's surveys by id, after `after_id`, at most `limit`; only `name` when given.
+  std::vector<SurveyRecord> list_surveys(std::int64_t tenant_id, std::int64_t after_id, int limit,
+                                         const std::optional<std::string>& name = std::nullopt);
+
+  // Resumable uploads (UploadError on refusal). begin_upload declares a file; declaring it
+  // again with the same size and SHA-256 keeps what is committed, with another it starts over.
+  UploadState begin_upload(std::int64_t survey_id, const std::string& name, std::int64_t size_bytes,
+                           const Sha256& digest);
+  // Stores `data` at `offset`, which must be the committed size. When the file is then whole,
+  // verifies size and SHA-256; a mismatch discards the upload (kChecksum) so a retry starts clean.
+  UploadState append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset, const Bytes& data);
+  std::optional<UploadState> upload_state(std::int64_t survey_id, const std::string& name);
+  std::vector<UploadState> uploads(std::int64_t survey_id);
+  // Streams a complete file into `out` chunk by chunk, checking its SHA-256 on the way.
+  void export_file(std::int64_t survey_id, const std::string& name, std::ostream& out);
   // Reassembles a file and checks its size and SHA-256; throws std::out_of_range if there is no
   // such file and std::runtime_error if it does not match what was uploaded.
   Bytes read_file(std::int64_t survey_id, const std::string& name);

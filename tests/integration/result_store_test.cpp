@@ -161,7 +161,7 @@ TEST(ResultStore, PosesTilesAndReportsRoundTrip) {
   f.results.put_tile(f.job, key, {'I', 'I', 42, 0, 8});  // replaced
   EXPECT_EQ(f.results.tile(f.job, key), (Bytes{'I', 'I', 42, 0, 8}));
   EXPECT_EQ(f.results.tile(f.job, {"openvdb", 3, -2, 7}), std::nullopt);
-  EXPECT_THROW(f.results.put_tile(f.job, {"png", 0, 0, 0}, {}), std::invalid_argument);
+  EXPECT_THROW(f.results.put_tile(f.job, {"jpeg", 0, 0, 0}, {}), std::invalid_argument);
 
   Report report{{{"consistency", {{"rmse_m", 0.21}}}, {"configuration", "gicp"}},
                 {{"histogram.png", {0x89, 'P', 'N', 'G'}}, {"trajectory.png", {0x89, 'P'}}}};

@@ -2,18 +2,7 @@
 # bathyslam-server against the private cluster: `migrate` applies the schema once; the server
 # refuses to start on a schema that is behind (unless --migrate) or ahead of it.
 set -euo pipefail
-db=server_schema_$$
-admin=$(bash "$PG_SH" url "$BATHYSLAM_TEST_PG")
-url=$(bash "$PG_SH" url "$BATHYSLAM_TEST_PG" "$db")
-work=$(mktemp -d)
-server_pid=""
-cleanup() {
-  [ -z "$server_pid" ] || kill "$server_pid" 2> /dev/null || true
-  psql -q "$admin" -c "DROP DATABASE IF EXISTS $db WITH (FORCE)" > /dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
-psql -q "$admin" -c "CREATE DATABASE $db" > /dev/null
+source "$(dirname "$0")/test_database.sh" server_schema
 
 expect_refusal() {  # expect_refusal PATTERN ARGS...: the server exits non-zero saying PATTERN
   local pattern=$1

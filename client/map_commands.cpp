@@ -1,0 +1,126 @@
+// bathyslam tiles / map: download a job's map tiles (all, or those meeting a bounding box) and
+// the whole map as one Cloud Optimized GeoTIFF.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "bathyslam/v1/map.grpc.pb.h"
+#include "client/commands.h"
+#include "client/remote.h"
+
+namespace bathyslam::cli {
+namespace {
+
+struct MapOptions {
+  Remote remote;
+  std::int64_t job = 0;
+  std::string out;
+  std::string format = "geotiff";
+  std::vector<double> bbox;  // min easting, min northing, max easting, max northing
+};
+
+// Streams a download into `path`; returns its size.
+template <typename Reader>
+std::int64_t save(Reader& reader, const std::string& call, const std::filesystem::path& path) {
+  std::filesystem::create_directories(path.parent_path());
+  const std::filesystem::path partial = path.string() + ".partial";
+  std::ofstream out(partial, std::ios::binary);
+  v1::DataChunk chunk;
+  std::int64_t size = 0;
+  while (reader->Read(&chunk)) {
+    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    size += static_cast<std::int64_t>(chunk.data().size());
+  }
+  out.close();
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) std::filesystem::remove(partial);
+  check(call, status);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  std::filesystem::rename(partial, path);
+  return size;
+}
+
+v1::TileFormat parse_format(const std::string& name) {
+  if (name == "geotiff") return v1::GEOTIFF;
+  if (name == "vdb") return v1::VDB;
+  if (name == "png") return v1::PNG;
+  throw std::invalid_argument("--format: geotiff, vdb or png");
+}
+
+const char* extension(v1::TileFormat format) {
+  return format == v1::GEOTIFF ? ".tif" : format == v1::VDB ? ".vdb" : ".png";
+}
+
+// Whether a tile meets the box. Tiles are `tile_size_cells` cells of `resolution_m << level`
+// metres; columns count east from min_easting, rows south from max_northing (as in GDAL).
+bool meets(const v1::MapInfo& info, const v1::TileRef& tile, const std::vector<double>& box) {
+  if (box.empty()) return true;
+  const double size = info.resolution_m() * (1 << tile.level()) * info.tile_size_cells();
+  const double west = info.min_easting() + tile.col() * size, north = info.max_northing() - tile.row() * size;
+  return west < box[2] && west + size > box[0] && north - size < box[3] && north > box[1];
+}
+
+void run_tiles(const MapOptions& o) {
+  const v1::TileFormat format = parse_format(o.format);
+  auto stub = v1::MapService::NewStub(o.remote.channel());
+  v1::GetMapInfoRequest ask;
+  ask.set_job_id(o.job);
+  v1::MapInfo info;
+  check("GetMapInfo", stub->GetMapInfo(o.remote.context(30).get(), ask, &info));
+  if (!o.bbox.empty() && info.tile_size_cells() == 0)
+    throw std::runtime_error("job " + std::to_string(o.job) + " has no tile grid to select a bounding box in");
+  int count = 0;
+  std::int64_t bytes = 0;
+  for (const v1::TileRef& tile : info.tiles()) {
+    if (std::find(tile.formats().begin(), tile.formats().end(), format) == tile.formats().end()) continue;
+    if (!meets(info, tile, o.bbox)) continue;
+    v1::GetTileRequest request;
+    request.set_job_id(o.job);
+    request.set_level(tile.level());
+    request.set_col(tile.col());
+    request.set_row(tile.row());
+    request.set_format(format);
+    auto context = o.remote.context(300);
+    auto reader = stub->GetTile(context.get(), request);
+    std::ostringstream name;
+    name << tile.level() << "/" << tile.col() << "_" << tile.row() << extension(format);
+    bytes += save(reader, "GetTile " + name.str(), std::filesystem::path(o.out) / name.str());
+    ++count;
+  }
+  std::printf("%d %s tiles (%s) of job %lld in %s (EPSG:%d)\n", count, o.format.c_str(), megabytes(bytes).c_str(),
+              static_cast<long long>(o.job), o.out.c_str(), info.epsg());
+}
+
+void run_map(const MapOptions& o) {
+  v1::GetMapRequest request;
+  request.set_job_id(o.job);
+  auto context = o.remote.context();
+  auto reader = v1::MapService::NewStub(o.remote.channel())->GetMap(context.get(), request);
+  const std::int64_t size = save(reader, "GetMap", o.out);
+  std::printf("map of job %lld: %s (%s)\n", static_cast<long long>(o.job), o.out.c_str(), megabytes(size).c_str());
+}
+
+}  // namespace
+
+void add_map_commands(CLI::App& app) {
+  auto tiles = std::make_shared<MapOptions>();
+  CLI::App* cmd = app.add_subcommand("tiles", "Download a job's map tiles into OUT/<level>/<col>_<row>.<ext>");
+  cmd->add_option("job", tiles->job, "job id")->required();
+  cmd->add_option("--out", tiles->out, "output folder")->required();
+  cmd->add_option("--format", tiles->format, "geotiff, vdb or png")->capture_default_str();
+  cmd->add_option("--bbox", tiles->bbox, "only tiles meeting min_e min_n max_e max_n (CRS metres)")->expected(4);
+  add_remote_options(cmd, tiles->remote);
+  cmd->callback([tiles] { run_tiles(*tiles); });
+
+  auto map = std::make_shared<MapOptions>();
+  cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF");
+  cmd->add_option("job", map->job, "job id")->required();
+  cmd->add_option("--out", map->out, "output file (.tif)")->required();
+  add_remote_options(cmd, map->remote);
+  cmd->callback([map] { run_map(*map); });
+}
+
+}  // namespace bathyslam::cli

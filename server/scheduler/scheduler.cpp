@@ -1,0 +1,200 @@
+#include "server/scheduler/scheduler.h"
+
+#include <algorithm>
+#include <charconv>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+
+#include "core/pipeline/pipeline.h"
+#include "core/pipeline/report.h"
+#include "server/log.h"
+#include "server/storage/stored_bundle.h"
+
+namespace bathyslam::server {
+namespace {
+
+namespace storage = bathyslam::storage;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// Watches a running job from its own thread: sets `cancel` when the job is no longer this
+// worker's (cancelled, deleted, lease reaped) or the server stops, and renews the lease.
+class JobWatcher {
+ public:
+  JobWatcher(storage::JobQueue& jobs, const storage::Lease& lease, const SchedulerOptions& options,
+             const std::atomic<bool>& stopping, std::atomic<bool>& cancel)
+      : thread_([&, lease] {
+          auto last_heartbeat = Clock::now();
+          std::unique_lock lock(mutex_);
+          while (!done_) {
+            if (stopping || !still_ours(jobs, lease)) {
+              cancel = true;
+            } else if (Clock::now() - last_heartbeat >= options.heartbeat) {
+              if (!jobs.heartbeat(lease)) cancel = true;
+              last_heartbeat = Clock::now();
+            }
+            wake_.wait_for(lock, options.state_poll);
+          }
+        }) {}
+  ~JobWatcher() {
+    {
+      std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_one();
+    thread_.join();
+  }
+
+ private:
+  static bool still_ours(storage::JobQueue& jobs, const storage::Lease& lease) {
+    try {
+      const storage::JobStatus status = jobs.status(lease.job_id);
+      return status.state == storage::JobState::kRunning && status.worker == lease.worker && status.attempts == lease.attempt;
+    } catch (const std::out_of_range&) {
+      return false;  // deleted with its survey
+    } catch (const storage::DatabaseError& error) {
+      log("job %lld: state poll failed: %s", static_cast<long long>(lease.job_id), error.what());
+      return true;  // the database may come back; the lease decides
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+// The job's stored parameters (every parameter, by name) applied to a fresh config.
+PipelineConfig job_config(const storage::ClaimedJob& job, int threads) {
+  PipelineConfig config;
+  config.configuration = parse_configuration(job.configuration);
+  for (const auto& [name, value] : job.parameters.items()) {
+    char text[64];
+    const auto end = std::to_chars(text, text + sizeof text, value.get<double>()).ptr;
+    set_parameter(config, name, std::string(text, end));
+  }
+  if (config.threads == 0) config.threads = threads;
+  return config;
+}
+
+storage::Report report_with_plots(const PipelineResult& result, const std::filesystem::path& scratch_root, std::int64_t job) {
+  const std::filesystem::path dir = scratch_root / ("report-" + std::to_string(job));
+  std::filesystem::create_directories(dir);
+  storage::Report report{report_json(result), {}};
+  write_report_plots(result, dir);
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    report.plots[entry.path().filename().string()] =
+        storage::Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::filesystem::remove_all(dir);
+  return report;
+}
+
+}  // namespace
+
+Scheduler::Scheduler(storage::SurveyStore& surveys, storage::JobQueue& jobs, storage::ResultStore& results,
+                     SchedulerOptions options)
+    : surveys_(surveys), jobs_(jobs), results_(results), options_(std::move(options)) {
+  if (options_.workers < 0) throw std::invalid_argument("--workers must not be negative");
+}
+
+Scheduler::~Scheduler() { stop(); }
+
+void Scheduler::start() {
+  for (int i = 0; i < options_.workers; ++i)
+    threads_.emplace_back([this, worker = options_.name + "/" + std::to_string(i)] { work(worker); });
+}
+
+void Scheduler::stop() {
+  stopping_ = true;
+  for (std::thread& thread : threads_) thread.join();
+  threads_.clear();
+}
+
+void Scheduler::work(const std::string& worker) {
+  while (!stopping_) {
+    try {
+      // A short wait, so that stop() is never kept waiting long.
+      if (auto job = jobs_.wait_for_job(worker, std::chrono::seconds(1))) run(*job);
+    } catch (const std::exception& error) {
+      log("%s: %s; retrying in 1 s", worker.c_str(), error.what());
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+    }
+  }
+}
+
+void Scheduler::run(const storage::ClaimedJob& job) {
+  const storage::Lease& lease = job.lease;
+  const long long id = lease.job_id;
+  const auto start = Clock::now();
+  log("job %lld: claimed by %s (attempt %d): survey %lld, %s", id, lease.worker.c_str(), lease.attempt,
+      static_cast<long long>(job.survey_id), job.configuration.c_str());
+  std::atomic<bool> cancel{false};
+  JobWatcher watcher(jobs_, lease, options_, stopping_, cancel);
+  auto event = [&](const std::string& stage, double progress, const std::string& message = "") {
+    jobs_.record_event(lease, stage, std::clamp(progress, 0.0, 1.0), message);
+  };
+  try {
+    // Registrations share the machine's cores among the workers.
+    const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const PipelineConfig config = job_config(job, std::max(1, cores / std::max(1, options_.workers)));
+    event("load", 0);
+    BundleReadResult bundle = storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
+    if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+    event("load", 1, std::to_string(bundle.survey->pings.size()) + " pings");
+
+    // Progress: every stage change, and within a stage at most every `progress_every`.
+    std::string last_stage;
+    auto last_event = Clock::now();
+    const PipelineResult result = run_pipeline(
+        *bundle.survey, config,
+        [&](std::string_view stage, double fraction) {
+          if (stage == last_stage && fraction < 1 && Clock::now() - last_event < options_.progress_every) return;
+          last_stage = stage;
+          last_event = Clock::now();
+          event(std::string(stage), fraction);
+        },
+        &cancel);
+
+    // What each stage produced, in the order of the pipeline, each in its own transaction.
+    auto store = [&](const char* what, const std::function<void()>& save) {
+      if (cancel) throw Cancelled();
+      event("store", 0, what);
+      save();
+    };
+    store("submaps", [&] {
+      results_.save_origin(id, result.submaps.origin);
+      results_.save_submaps(id, result.submaps.submaps);
+    });
+    store("constraints", [&] {
+      std::vector<storage::StoredConstraint> constraints;
+      for (const Constraint& c : result.constraints)
+        constraints.push_back({c, c.type == ConstraintType::kOdometry ? storage::RegistrationPath::kNone
+                                                                      : storage::RegistrationPath::kDirect});
+      results_.save_constraints(id, constraints);
+    });
+    store("optimized poses", [&] { results_.save_optimized_poses(id, result.optimized_poses); });
+    store("report", [&] { results_.save_report(id, report_with_plots(result, options_.scratch, id)); });
+    // Map fusion and tiles go here once core/fuse and core/tiles exist: fuse the optimized
+    // submaps into a grid, cut it into tiles (results_.put_tile for GEOTIFF/VDB/PNG, the whole
+    // COG as format "cog") and describe the grid (results_.save_map_grid); MapService serves them.
+    event("done", 1);
+    if (jobs_.succeed(lease)) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
+    else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
+  } catch (const Cancelled&) {
+    log("job %lld: stopped after %.1f s (%s)", id, seconds_since(start),
+        stopping_ ? "server stopping; the lease will expire and the job run again" : "cancelled or no longer ours");
+  } catch (const std::exception& error) {
+    if (cancel) {
+      log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
+    } else {
+      log("job %lld: failed after %.1f s: %s", id, seconds_since(start), error.what());
+      jobs_.fail(lease, error.what());
+    }
+  }
+}
+
+}  // namespace bathyslam::server

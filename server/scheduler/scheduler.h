@@ -1,0 +1,53 @@
+#pragma once
+// The scheduler: a pool of job workers, each claiming jobs from the queue, running the core
+// pipeline with the remaining cores, and storing what it produced. While a job runs, a watcher
+// polls its state (a cancelled job stops within a fraction of a second of the poll) and renews
+// the lease.
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/storage/job_queue.h"
+#include "server/storage/result_store.h"
+#include "server/storage/survey_store.h"
+
+namespace bathyslam::server {
+
+struct SchedulerOptions {
+  int workers = 1;
+  std::string name = "bathyslam";                  // workers are "<name>/<index>"
+  std::filesystem::path scratch;                   // bundles are parsed from copies here
+  std::chrono::milliseconds state_poll{200};       // how soon a cancellation is noticed
+  std::chrono::milliseconds heartbeat{5'000};      // well within the queue's lease
+  std::chrono::milliseconds progress_every{500};   // at most one progress event per stage this often
+};
+
+class Scheduler {
+ public:
+  Scheduler(storage::SurveyStore& surveys, storage::JobQueue& jobs, storage::ResultStore& results,
+            SchedulerOptions options);
+  ~Scheduler();  // stop()
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  void start();
+  // Stops claiming and interrupts running jobs; their leases expire and another server (or
+  // this one, restarted) runs them again.
+  void stop();
+
+ private:
+  void work(const std::string& worker);
+  void run(const storage::ClaimedJob& job);
+
+  storage::SurveyStore& surveys_;
+  storage::JobQueue& jobs_;
+  storage::ResultStore& results_;
+  SchedulerOptions options_;
+  std::atomic<bool> stopping_{false};
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace bathyslam::server

@@ -1,0 +1,218 @@
+#include "server/services/job_service.h"
+
+#include <charconv>
+#include <chrono>
+#include <thread>
+
+#include "core/pipeline/pipeline.h"
+#include "server/log.h"
+
+namespace bathyslam::server {
+namespace {
+
+namespace storage = bathyslam::storage;
+
+// How often WatchJob looks for new events: progress bars move smoothly, the database barely notices.
+constexpr auto kWatchPoll = std::chrono::milliseconds(200);
+
+v1::JobState to_proto(storage::JobState state) {
+  switch (state) {
+    case storage::JobState::kQueued: return v1::QUEUED;
+    case storage::JobState::kRunning: return v1::RUNNING;
+    case storage::JobState::kSucceeded: return v1::SUCCEEDED;
+    case storage::JobState::kFailed: return v1::FAILED;
+    case storage::JobState::kCancelled: return v1::CANCELLED;
+  }
+  return v1::JOB_STATE_UNSPECIFIED;
+}
+
+bool finished(storage::JobState state) {
+  return state != storage::JobState::kQueued && state != storage::JobState::kRunning;
+}
+
+void describe(const storage::JobRecord& job, v1::Job* reply) {
+  reply->set_id(job.id);
+  reply->set_survey_id(job.survey_id);
+  reply->set_configuration(job.configuration);
+  reply->set_state(to_proto(job.state));
+  reply->set_stage(job.stage);
+  reply->set_progress(job.progress);
+  reply->set_attempts(job.attempts);
+  reply->set_error(job.error.value_or(""));
+  reply->set_created_at(job.created_at);
+  reply->set_started_at(job.started_at);
+  reply->set_finished_at(job.finished_at);
+  for (const auto& [name, value] : job.parameters.items())
+    if (value.is_number()) (*reply->mutable_parameters())[name] = value.get<double>();
+}
+
+void stats(const nlohmann::json& s, v1::ErrorStats* out) {
+  if (!s.is_object()) return;
+  out->set_rmse(s.value("rmse", 0.0));
+  out->set_mean(s.value("mean", 0.0));
+  out->set_std(s.value("std", 0.0));
+  out->set_p50(s.value("p50", 0.0));
+  out->set_p95(s.value("p95", 0.0));
+  out->set_p99(s.value("p99", 0.0));
+  out->set_max(s.value("max", 0.0));
+  out->set_count(s.value("count", std::int64_t{0}));
+}
+
+// The effective configuration: defaults, then the overrides, each checked by name and range.
+PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
+  PipelineConfig config;
+  try {
+    config.configuration = parse_configuration(request.configuration());
+  } catch (const std::invalid_argument& error) {
+    throw invalid("configuration", error.what());
+  }
+  // In name order, so that the first bad one reported is the same every time.
+  std::map<std::string, std::string> overrides(request.parameters().begin(), request.parameters().end());
+  for (const auto& [name, value] : overrides) {
+    try {
+      set_parameter(config, name, value);
+    } catch (const std::invalid_argument& error) {
+      throw invalid("parameters[" + name + "]", error.what());
+    }
+  }
+  return config;
+}
+
+}  // namespace
+
+grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) {
+  return handle("SubmitJob", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    const storage::SurveyRecord survey = owned_survey(context_, tenant, request->survey_id());
+    const PipelineConfig config = effective_config(*request);
+    if (!survey.ready)
+      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                    "survey_id: survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
+    int active = 0;
+    for (const storage::JobRecord& job : context_.jobs.list_jobs(tenant, std::nullopt, 0, context_.limits.max_active_jobs * 4))
+      active += finished(job.state) ? 0 : 1;
+    if (active >= context_.limits.max_active_jobs)
+      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                    std::to_string(active) + " jobs are queued or running; the limit is " +
+                        std::to_string(context_.limits.max_active_jobs));
+    storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts};
+    const std::int64_t id = context_.jobs.enqueue(job);
+    log("job %lld queued: survey %lld, %s, %d overrides", static_cast<long long>(id), static_cast<long long>(survey.id),
+        job.configuration.c_str(), request->parameters_size());
+    describe(*context_.jobs.job(id), reply);
+  });
+}
+
+grpc::Status JobService::GetJob(grpc::ServerContext* call, const v1::GetJobRequest* request, v1::Job* reply) {
+  return handle("GetJob", call, [&] { describe(owned_job(context_, caller_tenant(context_, *call), request->job_id()), reply); });
+}
+
+grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobRequest* request,
+                                  grpc::ServerWriter<v1::JobEvent>* writer) {
+  return handle("WatchJob", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    storage::JobRecord job = owned_job(context_, tenant, request->job_id());
+    std::int64_t last_event = 0;
+    // Until the client goes away (or its deadline passes) or the job ends.
+    while (!call->IsCancelled()) {
+      // The state first: events written before a final state are all read below.
+      auto now = context_.jobs.job(job.id);
+      if (!now) throw Refusal(grpc::StatusCode::NOT_FOUND, "job_id: job " + std::to_string(job.id) + " was deleted");
+      job = *now;
+      for (const storage::StoredJobEvent& stored : context_.jobs.events_after(job.id, last_event)) {
+        v1::JobEvent event;
+        event.set_job_id(job.id);
+        event.set_stage(stored.event.stage);
+        event.set_progress(stored.event.progress);
+        event.set_message(stored.event.message);
+        event.set_at(stored.at);
+        event.set_attempt(stored.event.attempt);
+        event.set_state(finished(job.state) ? v1::RUNNING : to_proto(job.state));
+        if (!writer->Write(event)) return;
+        last_event = stored.id;
+      }
+      if (finished(job.state)) {
+        v1::JobEvent end;
+        end.set_job_id(job.id);
+        end.set_stage(storage::to_string(job.state));
+        end.set_progress(job.state == storage::JobState::kSucceeded ? 1 : job.progress);
+        end.set_message(job.error.value_or(""));
+        end.set_at(job.finished_at);
+        end.set_state(to_proto(job.state));
+        end.set_attempt(job.attempts);
+        writer->Write(end);
+        return;
+      }
+      std::this_thread::sleep_for(kWatchPoll);
+    }
+  });
+}
+
+grpc::Status JobService::CancelJob(grpc::ServerContext* call, const v1::CancelJobRequest* request, v1::Job* reply) {
+  return handle("CancelJob", call, [&] {
+    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    if (!context_.jobs.cancel(job.id))
+      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                    "job_id: job " + std::to_string(job.id) + " has " + storage::to_string(context_.jobs.job(job.id)->state) +
+                        " already");
+    log("job %lld cancelled by the client", static_cast<long long>(job.id));
+    describe(*context_.jobs.job(job.id), reply);
+  });
+}
+
+grpc::Status JobService::ListJobs(grpc::ServerContext* call, const v1::ListJobsRequest* request, v1::ListJobsResponse* reply) {
+  return handle("ListJobs", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    std::optional<std::int64_t> survey;
+    if (request->survey_id() != 0) survey = owned_survey(context_, tenant, request->survey_id()).id;
+    const int size = page_size(request->page_size());
+    auto jobs = context_.jobs.list_jobs(tenant, survey, page_token(request->page_token()), size + 1);
+    const bool more = static_cast<int>(jobs.size()) > size;
+    if (more) jobs.pop_back();
+    for (const storage::JobRecord& job : jobs) describe(job, reply->add_jobs());
+    if (more) reply->set_next_page_token(std::to_string(jobs.back().id));
+  });
+}
+
+grpc::Status JobService::GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) {
+  return handle("GetReport", call, [&] {
+    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    auto report = context_.results.load_report(job.id);
+    if (!report)
+      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                    "job_id: job " + std::to_string(job.id) + " is " + storage::to_string(job.state) + " and has no report");
+    const nlohmann::json& r = report->report;
+    reply->set_job_id(job.id);
+    reply->set_configuration(r.value("configuration", job.configuration));
+    const nlohmann::json consistency = r.value("consistency_error_m", nlohmann::json::object());
+    const nlohmann::json trajectory = r.value("trajectory_error_m", nlohmann::json::object());
+    stats(consistency.value("optimized", nlohmann::json()), reply->mutable_consistency());
+    stats(consistency.value("dead_reckoning", nlohmann::json()), reply->mutable_consistency_dr());
+    stats(trajectory.value("optimized", nlohmann::json()), reply->mutable_trajectory());
+    stats(trajectory.value("dead_reckoning", nlohmann::json()), reply->mutable_trajectory_dr());
+    const nlohmann::json histogram = consistency.value("histogram", nlohmann::json::object());
+    reply->set_histogram_bin_width_m(histogram.value("bin_width_m", 0.0));
+    for (const nlohmann::json& count : histogram.value("counts", nlohmann::json::array()))
+      reply->add_histogram_counts(count.get<std::int64_t>());
+    // Named, not temporaries: items() refers to the object it iterates.
+    const nlohmann::json constraints = r.value("constraints", nlohmann::json::object());
+    for (const auto& [type, c] : constraints.items()) {
+      v1::ConstraintStats* out = reply->add_constraints();
+      out->set_type(type);
+      out->set_candidates(c.value("candidates", std::int64_t{0}));
+      out->set_accepted(c.value("accepted", std::int64_t{0}));
+      out->set_rejected(c.value("rejected", std::int64_t{0}));
+      const nlohmann::json reasons = c.value("rejection_reasons", nlohmann::json::object());
+      for (const auto& [reason, n] : reasons.items())
+        (*out->mutable_rejection_reasons())[reason] = n.get<std::int64_t>();
+    }
+    for (const auto& [name, png] : report->plots) {
+      v1::Plot* plot = reply->add_plots();
+      plot->set_name(name);
+      plot->set_png(png.data(), png.size());
+    }
+    reply->set_report_json(r.dump());
+  });
+}
+
+}  // namespace bathyslam::server

@@ -1,0 +1,24 @@
+#pragma once
+// bathyslam.v1.JobService: submit SLAM jobs, follow them, cancel them, read their reports.
+#include "bathyslam/v1/job.grpc.pb.h"
+#include "server/services/service_context.h"
+
+namespace bathyslam::server {
+
+class JobService final : public v1::JobService::Service {
+ public:
+  explicit JobService(ServiceContext& context) : context_(context) {}
+
+  grpc::Status SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) override;
+  grpc::Status GetJob(grpc::ServerContext* call, const v1::GetJobRequest* request, v1::Job* reply) override;
+  grpc::Status WatchJob(grpc::ServerContext* call, const v1::WatchJobRequest* request,
+                        grpc::ServerWriter<v1::JobEvent>* writer) override;
+  grpc::Status CancelJob(grpc::ServerContext* call, const v1::CancelJobRequest* request, v1::Job* reply) override;
+  grpc::Status ListJobs(grpc::ServerContext* call, const v1::ListJobsRequest* request, v1::ListJobsResponse* reply) override;
+  grpc::Status GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) override;
+
+ private:
+  ServiceContext& context_;
+};
+
+}  // namespace bathyslam::server

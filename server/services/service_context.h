@@ -1,0 +1,62 @@
+#pragma once
+// What every service handler needs: the stores, the caller's tenant, the limits, and the
+// translation of refusals into gRPC statuses that name the field at fault.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/storage/job_queue.h"
+#include "server/storage/result_store.h"
+#include "server/storage/survey_store.h"
+
+namespace bathyslam::server {
+
+struct Limits {
+  std::int64_t max_file_bytes = std::int64_t{8} << 30;  // one uploaded file
+  int max_active_jobs = 16;                              // queued + running, per tenant
+  int max_attempts = 2;                                  // per job: a crashed worker's job runs once more
+};
+
+struct ServiceContext {
+  storage::SurveyStore& surveys;
+  storage::JobQueue& jobs;
+  storage::ResultStore& results;
+  Limits limits;
+  // Callers without a token act as this tenant (--dev-tenant); nullopt: a token is required.
+  std::optional<std::int64_t> dev_tenant;
+};
+
+// A refusal with its status code, thrown by handlers and turned into the response status.
+class Refusal : public std::runtime_error {
+ public:
+  Refusal(grpc::StatusCode code, const std::string& message) : std::runtime_error(message), code_(code) {}
+  grpc::StatusCode code() const { return code_; }
+
+ private:
+  grpc::StatusCode code_;
+};
+
+// INVALID_ARGUMENT "field: message".
+Refusal invalid(const std::string& field, const std::string& message);
+
+// The tenant of the caller: `authorization: Bearer <token>` metadata, or the dev tenant.
+// UNAUTHENTICATED otherwise.
+std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContext& call);
+
+// The survey / job if it exists and belongs to the tenant; NOT_FOUND otherwise (another
+// tenant's ids are indistinguishable from unknown ones).
+storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id);
+storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
+
+// Page sizes (0 means 100, at most 1000) and page tokens (an id as decimal text).
+int page_size(int requested);
+std::int64_t page_token(const std::string& token);
+
+// Runs a handler: Refusal becomes its status, a database failure UNAVAILABLE, anything else
+// INTERNAL (with its message, and logged); a call past its deadline DEADLINE_EXCEEDED.
+grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body);
+
+}  // namespace bathyslam::server

@@ -1,0 +1,225 @@
+#include "server/services/survey_service.h"
+
+#include "core/io/crs.h"
+#include "core/summary/survey_summary.h"
+#include "server/log.h"
+#include "server/storage/stored_bundle.h"
+
+namespace bathyslam::server {
+namespace {
+
+namespace storage = bathyslam::storage;
+
+constexpr std::size_t kMaxChunkBytes = 1 << 20;
+// gRPC carries a status message in a trailer of limited size: the first problems go there,
+// GetSurvey lists them all.
+constexpr std::size_t kProblemsInStatus = 40;
+
+nlohmann::json object_field(const std::string& field, const std::string& text) {
+  if (text.empty()) return nlohmann::json::object();
+  nlohmann::json value = nlohmann::json::parse(text, nullptr, false);
+  if (value.is_discarded() || !value.is_object()) throw invalid(field, "must be a JSON object");
+  return value;
+}
+
+void describe_upload(const storage::UploadState& upload, v1::UploadStatus* reply) {
+  reply->set_file_name(upload.name);
+  reply->set_size_bytes(upload.size_bytes);
+  reply->set_committed_bytes(upload.committed_bytes);
+  reply->set_complete(upload.complete);
+  reply->set_sha256(upload.sha256.data(), upload.sha256.size());
+}
+
+Refusal upload_refusal(const storage::UploadError& error) {
+  using Kind = storage::UploadError::Kind;
+  switch (error.kind()) {
+    case Kind::kNotFound: return Refusal(grpc::StatusCode::NOT_FOUND, error.what());
+    case Kind::kFinalized:
+    case Kind::kConflict: return Refusal(grpc::StatusCode::FAILED_PRECONDITION, error.what());
+    case Kind::kBadOffset: return Refusal(grpc::StatusCode::ABORTED, error.what());
+    case Kind::kChecksum:
+    case Kind::kInvalid: break;
+  }
+  return Refusal(grpc::StatusCode::INVALID_ARGUMENT, error.what());
+}
+
+v1::Problem to_proto(const nlohmann::json& problem) {
+  v1::Problem out;
+  out.set_severity(problem.value("severity", "error") == "warning" ? v1::Problem::WARNING : v1::Problem::ERROR);
+  out.set_file(problem.value("file", ""));
+  out.set_line(problem.value("line", std::uint64_t{0}));
+  out.set_field(problem.value("field", ""));
+  out.set_message(problem.value("message", ""));
+  return out;
+}
+
+nlohmann::json to_json(const Problem& problem) {
+  return {{"severity", problem.severity == Problem::Severity::kWarning ? "warning" : "error"},
+          {"file", problem.file},
+          {"line", problem.line},
+          {"field", problem.field},
+          {"message", problem.message}};
+}
+
+}  // namespace
+
+void SurveyService::describe(const storage::SurveyRecord& survey, bool details, v1::Survey* reply) {
+  reply->set_id(survey.id);
+  reply->set_name(survey.name);
+  reply->set_crs(survey.crs);
+  reply->set_sonar_json(survey.sonar.dump());
+  reply->set_vehicle_json(survey.vehicle.dump());
+  reply->set_state(survey.ready ? v1::Survey::READY : v1::Survey::UPLOADING);
+  if (!details) return;
+  for (const storage::UploadState& upload : context_.surveys.uploads(survey.id)) describe_upload(upload, reply->add_files());
+  if (auto validation = context_.surveys.validation(survey.id)) {
+    for (const nlohmann::json& problem : validation->problems) *reply->add_problems() = to_proto(problem);
+    if (!validation->summary.is_null()) reply->set_summary_json(validation->summary.dump());
+  }
+}
+
+grpc::Status SurveyService::CreateSurvey(grpc::ServerContext* call, const v1::CreateSurveyRequest* request,
+                                         v1::Survey* reply) {
+  return handle("CreateSurvey", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    if (request->name().empty()) throw invalid("name", "a survey needs a name");
+    if (!request->crs().empty())
+      if (auto problem = crs_problem(request->crs())) throw invalid("crs", *problem);
+    const nlohmann::json sonar = object_field("sonar_json", request->sonar_json());
+    const nlohmann::json vehicle = object_field("vehicle_json", request->vehicle_json());
+    const auto same_name = context_.surveys.list_surveys(tenant, 0, 1, request->name());
+    if (!same_name.empty())
+      throw Refusal(grpc::StatusCode::ALREADY_EXISTS,
+                    "name: survey " + std::to_string(same_name.front().id) + " is named '" + request->name() + "' already");
+    const std::int64_t id = context_.surveys.create_survey(tenant, request->name(), request->crs(), sonar, vehicle);
+    log("survey %lld created: '%s'", static_cast<long long>(id), request->name().c_str());
+    describe(*context_.surveys.survey(id), true, reply);
+  });
+}
+
+grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerReader<v1::UploadFileRequest>* reader,
+                                       v1::UploadStatus* reply) {
+  return handle("UploadFile", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    v1::UploadFileRequest message;
+    if (!reader->Read(&message)) throw invalid("survey_id", "the stream ended before its first message");
+    const std::int64_t survey_id = message.survey_id();
+    const std::string name = message.file_name();
+    owned_survey(context_, tenant, survey_id);
+    if (!storage::is_bundle_file(name))
+      throw invalid("file_name", "'" + name + "' is not a bundle file (survey.json, nav.csv, pings.csv, reference_nav.csv)");
+    if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
+    if (message.size_bytes() > context_.limits.max_file_bytes)
+      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
+                                                              " is over this server's limit of " +
+                                                              std::to_string(context_.limits.max_file_bytes));
+    storage::Sha256 digest{};
+    std::copy(message.sha256().begin(), message.sha256().end(), digest.begin());
+    try {
+      storage::UploadState state = context_.surveys.begin_upload(survey_id, name, message.size_bytes(), digest);
+      // Each chunk is committed as it arrives: a cut stream keeps everything received before it.
+      do {
+        if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
+        if (message.data().empty()) continue;
+        storage::Bytes data(message.data().begin(), message.data().end());
+        state = context_.surveys.append_chunk(survey_id, name, message.offset(), data);
+      } while (reader->Read(&message));
+      describe_upload(state, reply);
+      if (state.complete) log("survey %lld: '%s' uploaded, %lld bytes", static_cast<long long>(survey_id), name.c_str(),
+                              static_cast<long long>(state.size_bytes));
+    } catch (const storage::UploadError& error) {
+      throw upload_refusal(error);
+    }
+  });
+}
+
+grpc::Status SurveyService::GetUploadStatus(grpc::ServerContext* call, const v1::GetUploadStatusRequest* request,
+                                            v1::UploadStatus* reply) {
+  return handle("GetUploadStatus", call, [&] {
+    owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
+    auto state = context_.surveys.upload_state(request->survey_id(), request->file_name());
+    if (!state) throw Refusal(grpc::StatusCode::NOT_FOUND, "file_name: no upload of '" + request->file_name() + "'");
+    describe_upload(*state, reply);
+  });
+}
+
+grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::FinalizeSurveyRequest* request,
+                                           v1::Survey* reply) {
+  return handle("FinalizeSurvey", call, [&] {
+    const storage::SurveyRecord survey = owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
+    if (survey.ready) return describe(survey, true, reply);  // finalizing twice changes nothing
+    nlohmann::json problems = nlohmann::json::array();
+    bool errors = false;
+    for (const storage::UploadState& upload : context_.surveys.uploads(survey.id)) {
+      if (upload.complete) continue;
+      problems.push_back(to_json({Problem::Severity::kError, upload.name, 0, "",
+                                  "upload incomplete: " + std::to_string(upload.committed_bytes) + " of " +
+                                      std::to_string(upload.size_bytes) + " bytes"}));
+      errors = true;
+    }
+    BundleReadResult bundle = storage::read_stored_bundle(context_.surveys, survey.id, scratch_);
+    for (const Problem& problem : bundle.problems) {
+      problems.push_back(to_json(problem));
+      errors = errors || problem.severity == Problem::Severity::kError;
+    }
+    if (bundle.survey && !survey.crs.empty() && bundle.survey->metadata.crs != survey.crs) {
+      problems.push_back(to_json({Problem::Severity::kError, std::string(kSurveyJsonFile), 0, "crs",
+                                  "'" + bundle.survey->metadata.crs + "' but the survey was created with '" + survey.crs + "'"}));
+      errors = true;
+    }
+    storage::Validation validation{!errors, problems, nullptr};
+    if (!errors && bundle.survey) validation.summary = to_json(summarize(*bundle.survey));
+    context_.surveys.save_validation(survey.id, validation);
+    log("survey %lld finalized: %s, %zu problems", static_cast<long long>(survey.id), errors ? "invalid" : "ready",
+        problems.size());
+    if (errors) {
+      std::string text = "survey " + std::to_string(survey.id) + " is not valid:";
+      std::size_t listed = 0;
+      for (const nlohmann::json& problem : problems) {
+        if (listed++ == kProblemsInStatus) {
+          text += "\n  ... and " + std::to_string(problems.size() - kProblemsInStatus) + " more (GetSurvey lists all)";
+          break;
+        }
+        v1::Problem p = to_proto(problem);
+        text += "\n  " + Problem{p.severity() == v1::Problem::WARNING ? Problem::Severity::kWarning : Problem::Severity::kError,
+                                 p.file(), p.line(), p.field(), p.message()}
+                             .to_string();
+      }
+      throw Refusal(grpc::StatusCode::INVALID_ARGUMENT, text);
+    }
+    describe(*context_.surveys.survey(survey.id), true, reply);
+  });
+}
+
+grpc::Status SurveyService::GetSurvey(grpc::ServerContext* call, const v1::GetSurveyRequest* request, v1::Survey* reply) {
+  return handle("GetSurvey", call, [&] {
+    describe(owned_survey(context_, caller_tenant(context_, *call), request->survey_id()), true, reply);
+  });
+}
+
+grpc::Status SurveyService::ListSurveys(grpc::ServerContext* call, const v1::ListSurveysRequest* request,
+                                        v1::ListSurveysResponse* reply) {
+  return handle("ListSurveys", call, [&] {
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    const int size = page_size(request->page_size());
+    std::optional<std::string> name;
+    if (!request->name().empty()) name = request->name();
+    // One more than asked: whether there is a next page.
+    auto surveys = context_.surveys.list_surveys(tenant, page_token(request->page_token()), size + 1, name);
+    const bool more = static_cast<int>(surveys.size()) > size;
+    if (more) surveys.pop_back();
+    for (const storage::SurveyRecord& survey : surveys) describe(survey, false, reply->add_surveys());
+    if (more) reply->set_next_page_token(std::to_string(surveys.back().id));
+  });
+}
+
+grpc::Status SurveyService::DeleteSurvey(grpc::ServerContext* call, const v1::DeleteSurveyRequest* request,
+                                         v1::DeleteSurveyResponse*) {
+  return handle("DeleteSurvey", call, [&] {
+    owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
+    context_.surveys.delete_survey(request->survey_id());
+    log("survey %lld deleted", static_cast<long long>(request->survey_id()));
+  });
+}
+
+}  // namespace bathyslam::server

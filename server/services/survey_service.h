@@ -1,0 +1,33 @@
+#pragma once
+// bathyslam.v1.SurveyService: surveys, resumable chunked uploads and bundle validation.
+#include <filesystem>
+
+#include "bathyslam/v1/survey.grpc.pb.h"
+#include "server/services/service_context.h"
+
+namespace bathyslam::server {
+
+class SurveyService final : public v1::SurveyService::Service {
+ public:
+  SurveyService(ServiceContext& context, std::filesystem::path scratch) : context_(context), scratch_(std::move(scratch)) {}
+
+  grpc::Status CreateSurvey(grpc::ServerContext* call, const v1::CreateSurveyRequest* request, v1::Survey* reply) override;
+  grpc::Status UploadFile(grpc::ServerContext* call, grpc::ServerReader<v1::UploadFileRequest>* reader,
+                          v1::UploadStatus* reply) override;
+  grpc::Status GetUploadStatus(grpc::ServerContext* call, const v1::GetUploadStatusRequest* request,
+                               v1::UploadStatus* reply) override;
+  grpc::Status FinalizeSurvey(grpc::ServerContext* call, const v1::FinalizeSurveyRequest* request, v1::Survey* reply) override;
+  grpc::Status GetSurvey(grpc::ServerContext* call, const v1::GetSurveyRequest* request, v1::Survey* reply) override;
+  grpc::Status ListSurveys(grpc::ServerContext* call, const v1::ListSurveysRequest* request,
+                           v1::ListSurveysResponse* reply) override;
+  grpc::Status DeleteSurvey(grpc::ServerContext* call, const v1::DeleteSurveyRequest* request,
+                            v1::DeleteSurveyResponse* reply) override;
+
+ private:
+  void describe(const storage::SurveyRecord& survey, bool details, v1::Survey* reply);
+
+  ServiceContext& context_;
+  std::filesystem::path scratch_;  // where FinalizeSurvey copies a bundle to parse it
+};
+
+}  // namespace bathyslam::server

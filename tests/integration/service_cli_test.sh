@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# The CLI against a real server and PostgreSQL: an upload cut in the middle and resumed, a gicp
+# job submitted, watched and reported, tiles and map asked for, tokens.
+set -euo pipefail
+source "$(dirname "$0")/test_database.sh" service_cli
+
+"$BATHYSLAM_SERVER_BIN" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant cli \
+  > "$work/server.out" 2> "$work/server.log" &
+server_pid=$!
+for _ in $(seq 100); do grep -q "listening" "$work/server.out" && break; sleep 0.1; done
+export BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$work/server.out")
+[ -n "$BATHYSLAM_SERVER" ] || fail "server did not start"
+
+# Cut after 3 MB (inside pings.csv), then the same command resumes where the server stopped.
+if "$BATHYSLAM" upload "$SMALL_BUNDLE" --stop-after-bytes 3000000 > "$work/up1" 2> "$work/up1.err"; then
+  fail "a cut upload reported success"
+fi
+grep -q "run the same command again to resume" "$work/up1.err" || fail "no resume hint: $(cat "$work/up1.err")"
+"$BATHYSLAM" upload "$SMALL_BUNDLE" > "$work/up2" 2> "$work/up2.err" || fail "upload: $(cat "$work/up2.err")"
+grep -q "resuming pings.csv at" "$work/up2.err" || fail "did not resume: $(cat "$work/up2.err")"
+grep -q "nav.csv *uploaded already" "$work/up2.err" || fail "re-sent nav.csv: $(cat "$work/up2.err")"
+survey=$(awk '/^survey .* ready$/ {print $2}' "$work/up2")
+[ -n "$survey" ] || fail "no survey id in: $(cat "$work/up2")"
+
+if "$BATHYSLAM" submit "$survey" --config gicp --set gicp.max_iterations=0 2> "$work/bad.err"; then
+  fail "an out-of-range parameter was accepted"
+fi
+grep -q "INVALID_ARGUMENT: parameters\[gicp.max_iterations\]" "$work/bad.err" || fail "$(cat "$work/bad.err")"
+
+job=$("$BATHYSLAM" submit "$survey" --config gicp | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$job" > "$work/watch" 2> "$work/watch.err" || fail "watch: $(cat "$work/watch" "$work/watch.err")"
+grep -q "job $job succeeded" "$work/watch" || fail "$(cat "$work/watch")"
+for stage in load submaps register graph eval store; do
+  grep -q "  $stage " "$work/watch.err" || fail "no progress bar for $stage"
+done
+
+"$BATHYSLAM" report "$job" --out "$work/report" > "$work/table" || fail "report"
+grep -q "^consistency " "$work/table" && grep -q "^adjacent " "$work/table" || fail "$(cat "$work/table")"
+for png in consistency_histogram trajectory_error trajectory; do
+  [ "$(head -c 4 "$work/report/$png.png" | tail -c 3)" = "PNG" ] || fail "$png.png is not a PNG"
+done
+"$BATHYSLAM" report "$job" --json | python3 -c 'import json, sys; r = json.load(sys.stdin); assert r["configuration"] == "gicp"'
+"$BATHYSLAM" jobs | grep -Eq "^ +$job +$survey +gicp +succeeded" || fail "jobs: $("$BATHYSLAM" jobs)"
+
+# No tile generation yet: nothing to download, and no map.
+"$BATHYSLAM" tiles "$job" --out "$work/tiles" | grep -q "^0 geotiff tiles" || fail "tiles"
+if "$BATHYSLAM" map "$job" --out "$work/map.tif" 2> "$work/map.err"; then fail "a map without fusion"; fi
+grep -q "NOT_FOUND" "$work/map.err" || fail "$(cat "$work/map.err")"
+
+# Tokens: another tenant sees none of this; a wrong token is refused.
+token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)
+[ "$(BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs | wc -l)" = 1 ] || fail "another tenant sees jobs"
+if BATHYSLAM_TOKEN=bst_wrong "$BATHYSLAM" jobs 2> "$work/auth.err"; then fail "a wrong token was accepted"; fi
+grep -q "UNAUTHENTICATED" "$work/auth.err" || fail "$(cat "$work/auth.err")"
+echo "service cli: ok"

@@ -1,0 +1,320 @@
+#!/usr/bin/env python3
+"""The bathyslam API from another language: Debian's python3-grpcio against a real
+bathyslam-server and a real PostgreSQL (the ctest `pg` cluster), stubs generated from the
+same protos with grpc_python_plugin. Environment (set by ctest): BATHYSLAM_SERVER_BIN,
+BATHYSLAM_TEST_PG, PG_SH, PROTO_DIR, SMALL_BUNDLE (a simulated `small` bundle)."""
+import hashlib
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+import grpc
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ENV = os.environ
+STUBS = tempfile.mkdtemp(prefix="bathyslam-py-")
+subprocess.run(["protoc", "-I", ENV["PROTO_DIR"], "-I", HERE, "--python_out", STUBS, "--grpc_python_out", STUBS,
+                "--plugin=protoc-gen-grpc_python=/usr/bin/grpc_python_plugin",
+                "bathyslam/v1/common.proto", "bathyslam/v1/survey.proto", "bathyslam/v1/job.proto",
+                "bathyslam/v1/map.proto", "health.proto"], check=True)
+sys.path.insert(0, STUBS)
+from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc  # noqa: E402
+import health_pb2, health_pb2_grpc  # noqa: E402
+
+CHUNK = 1 << 20
+BUNDLE = ENV["SMALL_BUNDLE"]
+FILES = ["survey.json", "nav.csv", "pings.csv", "reference_nav.csv"]
+
+
+def read(name):
+    with open(os.path.join(BUNDLE, name), "rb") as f:
+        return f.read()
+
+
+def psql(url, sql, **variables):
+    """Runs SQL through psql's stdin with its values as psql variables (quoted by psql)."""
+    args = ["psql", "-qAt", "-v", "ON_ERROR_STOP=1", url]
+    for name, value in variables.items():
+        args += ["-v", f"{name}={value}"]
+    return subprocess.run(args, input=sql, text=True, capture_output=True, check=True).stdout.strip()
+
+
+class Server:
+    """bathyslam-server on a database of its own, on a free port."""
+
+    def __init__(self):
+        pg_sh, cluster = ENV["PG_SH"], ENV["BATHYSLAM_TEST_PG"]
+        self.db = f"service_api_{os.getpid()}"
+        self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
+        self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
+        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
+        self.log = open(os.path.join(STUBS, "server.log"), "w+")
+        self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
+                                         "--workers", "1", "--dev-tenant", "python"], stdout=subprocess.PIPE, stderr=self.log, text=True)
+        line = self.process.stdout.readline()
+        match = re.search(r"listening on (\S+)", line)
+        if not match:
+            raise RuntimeError("server did not start: " + line + self.server_log())
+        self.channel = grpc.insecure_channel(match.group(1), options=[("grpc.max_receive_message_length", 64 << 20)])
+
+    def server_log(self):
+        self.log.flush()
+        self.log.seek(0)
+        return self.log.read()
+
+    def stop(self):
+        self.channel.close()
+        self.process.terminate()
+        self.process.wait(timeout=30)
+        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
+
+
+def upload_requests(survey_id, name, data, start=0, sha=None, cut_after=None):
+    """The UploadFile stream from `start`; raising after `cut_after` chunks cuts the call."""
+    sent = 0
+    offset = start
+    first = True
+    while first or offset < len(data):
+        if cut_after is not None and sent == cut_after:
+            time.sleep(1)  # the chunks sent reach the server, then the connection drops
+            raise ConnectionError("cut")
+        chunk = data[offset:offset + CHUNK]
+        request = survey_pb2.UploadFileRequest(offset=offset, data=chunk)
+        if first:
+            request.survey_id, request.file_name, request.size_bytes = survey_id, name, len(data)
+            request.sha256 = sha if sha is not None else hashlib.sha256(data).digest()
+        yield request
+        first = False
+        offset += len(chunk)
+        sent += 1
+
+
+class ServiceApiTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = Server()
+        cls.surveys = survey_pb2_grpc.SurveyServiceStub(cls.server.channel)
+        cls.jobs = job_pb2_grpc.JobServiceStub(cls.server.channel)
+        cls.maps = map_pb2_grpc.MapServiceStub(cls.server.channel)
+
+    @classmethod
+    def tearDownClass(cls):
+        if sys.exc_info()[0] is not None or os.environ.get("SHOW_SERVER_LOG"):
+            print(cls.server.server_log())
+        cls.server.stop()
+
+    def create(self, name):
+        return self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name=name, crs="EPSG:32651"), timeout=30).id
+
+    def upload(self, survey_id, name, data, **kwargs):
+        return self.surveys.UploadFile(upload_requests(survey_id, name, data, **kwargs), timeout=120)
+
+    def ready_survey(self, name):
+        survey_id = self.create(name)
+        for f in FILES:
+            self.assertTrue(self.upload(survey_id, f, read(f)).complete)
+        survey = self.surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=120)
+        self.assertEqual(survey.state, survey_pb2.Survey.READY)
+        return survey_id
+
+    def watch(self, job_id, until=None, timeout=120):
+        events = []
+        for event in self.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job_id), timeout=timeout):
+            events.append(event)
+            if until and until(event):
+                break
+        return events
+
+    def assert_code(self, code, call, *args, **kwargs):
+        with self.assertRaises(grpc.RpcError) as raised:
+            call(*args, timeout=60, **kwargs)
+        self.assertEqual(raised.exception.code(), code, raised.exception.details())
+        return raised.exception.details()
+
+    def test_health_serving(self):
+        health = health_pb2_grpc.HealthStub(self.server.channel)
+        reply = health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
+        self.assertEqual(reply.status, health_pb2.HealthCheckResponse.SERVING)
+
+    def test_round_trip_with_a_cut_upload(self):
+        survey_id = self.create("round trip")
+        for f in ["survey.json", "nav.csv", "reference_nav.csv"]:
+            self.upload(survey_id, f, read(f))
+        pings = read("pings.csv")
+        self.assertGreater(len(pings), 3 * CHUNK, "the cut must fall in the middle of the file")
+        # The connection is cut after five chunks: what arrived stays committed.
+        with self.assertRaises(grpc.RpcError):
+            self.upload(survey_id, "pings.csv", pings, cut_after=5)
+        status = self.surveys.GetUploadStatus(survey_pb2.GetUploadStatusRequest(survey_id=survey_id, file_name="pings.csv"))
+        self.assertFalse(status.complete)
+        self.assertGreater(status.committed_bytes, 0)
+        self.assertLess(status.committed_bytes, len(pings))
+        # Not ready while a file is incomplete.
+        details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.FinalizeSurvey,
+                                   survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("pings.csv: upload incomplete", details)
+        # A chunk at another offset than the committed size is refused.
+        self.assert_code(grpc.StatusCode.ABORTED, self.surveys.UploadFile,
+                         upload_requests(survey_id, "pings.csv", pings, start=status.committed_bytes + 1))
+        # Resumed from the committed size: complete, and the server's checksum is ours.
+        started = time.monotonic()
+        done = self.upload(survey_id, "pings.csv", pings, start=status.committed_bytes)
+        seconds = time.monotonic() - started
+        print(f"\nresumed upload: {(len(pings) - status.committed_bytes) / 1e6 / seconds:.1f} MB/s", file=sys.stderr)
+        self.assertTrue(done.complete)
+        self.assertEqual(done.committed_bytes, len(pings))
+        self.assertEqual(done.sha256, hashlib.sha256(pings).digest())
+        survey = self.surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=120)
+        self.assertEqual(survey.state, survey_pb2.Survey.READY)
+        self.assertIn('"pings"', survey.summary_json)
+
+        submitted = time.monotonic()
+        job = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="odometry"), timeout=30)
+        self.assertLess(time.monotonic() - submitted, 2, "SubmitJob returns at once")
+        self.assertIn(job.state, (job_pb2.QUEUED, job_pb2.RUNNING))
+        events = self.watch(job.id)
+        self.assertEqual(events[-1].state, job_pb2.SUCCEEDED, events[-1].message)
+        stages = [e.stage for e in events]
+        for stage in ["load", "submaps", "graph", "eval", "store", "done"]:
+            self.assertIn(stage, stages)
+        print(f"odometry job: {time.monotonic() - submitted:.1f} s from submit to succeeded", file=sys.stderr)
+
+        report = self.jobs.GetReport(job_pb2.GetReportRequest(job_id=job.id), timeout=30)
+        self.assertEqual(report.configuration, "odometry")
+        self.assertGreater(report.consistency.count, 100)
+        self.assertGreater(report.trajectory.rmse, 0)
+        self.assertEqual(sum(report.histogram_counts), report.consistency.count)
+        self.assertEqual({p.name for p in report.plots},
+                         {"consistency_histogram.png", "trajectory_error.png", "trajectory.png"})
+        for plot in report.plots:
+            self.assertEqual(plot.png[:8], b"\x89PNG\r\n\x1a\n")
+        trajectory = self.maps.GetTrajectory(map_pb2.GetTrajectoryRequest(job_id=job.id), timeout=30)
+        self.assertGreater(len(trajectory.poses), 5)
+        self.assertEqual(trajectory.origin_easting % 100, 0)
+        listed = self.jobs.ListJobs(job_pb2.ListJobsRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual([j.id for j in listed.jobs], [job.id])
+
+        # Tiles are served from what the tiling stage stores; a GeoTIFF put there comes back
+        # byte for byte and GDAL reads it.
+        from osgeo import gdal
+        gdal.UseExceptions()
+        tiff = gdal.GetDriverByName("GTiff").Create("/vsimem/t.tif", 64, 64, 1, gdal.GDT_Float32)
+        tiff.SetGeoTransform([452000, 0.5, 0, 4630100, 0, -0.5])
+        tiff.GetRasterBand(1).Fill(-10.25)
+        tiff = None
+        data = bytes(gdal.VSIGetMemFileBuffer_unsafe("/vsimem/t.tif"))
+        psql(self.server.url, "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data)"
+             " VALUES (:job, 'geotiff', 0, 3, 1, decode(:'data', 'hex'))", job=job.id, data=data.hex())
+        info = self.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30)
+        self.assertEqual(info.epsg, 32651)
+        self.assertIn("UTM zone 51N", info.crs_wkt)
+        self.assertEqual([(t.level, t.col, t.row) for t in info.tiles], [(0, 3, 1)])
+        chunks = list(self.maps.GetTile(map_pb2.GetTileRequest(job_id=job.id, level=0, col=3, row=1,
+                                                               format=map_pb2.GEOTIFF), timeout=30))
+        served = b"".join(c.data for c in chunks)
+        self.assertEqual(served, data)
+        gdal.FileFromMemBuffer("/vsimem/served.tif", served)
+        dataset = gdal.Open("/vsimem/served.tif")  # kept: a band does not keep its dataset alive
+        self.assertEqual(dataset.GetGeoTransform(), (452000, 0.5, 0, 4630100, 0, -0.5))
+        self.assertEqual(dataset.GetRasterBand(1).ReadAsArray()[5, 5], -10.25)
+        self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
+                         map_pb2.GetTileRequest(job_id=job.id, level=0, col=3, row=1, format=map_pb2.VDB))
+        self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetMap(r, **kw)),
+                         map_pb2.GetMapRequest(job_id=job.id))
+
+        # Deleting the survey deletes its jobs and results.
+        self.surveys.DeleteSurvey(survey_pb2.DeleteSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assert_code(grpc.StatusCode.NOT_FOUND, self.jobs.GetJob, job_pb2.GetJobRequest(job_id=job.id))
+
+    def test_wrong_checksum_is_refused_and_discarded(self):
+        survey_id = self.create("wrong checksum")
+        nav = read("nav.csv")
+        details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.UploadFile,
+                                   upload_requests(survey_id, "nav.csv", nav, sha=hashlib.sha256(b"other").digest()))
+        self.assertIn("sha256", details)
+        status = self.surveys.GetUploadStatus(survey_pb2.GetUploadStatusRequest(survey_id=survey_id, file_name="nav.csv"))
+        self.assertFalse(status.complete)
+        self.assertEqual(status.committed_bytes, 0)
+        self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.UploadFile,
+                         upload_requests(survey_id, "nav.csv", nav, sha=b"short"))
+        self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.UploadFile,
+                         upload_requests(survey_id, "../etc/passwd", nav))
+
+    def test_malformed_bundle_lists_file_and_line(self):
+        survey_id = self.create("malformed")
+        nav = read("nav.csv").decode().split("\n")
+        fields = nav[4].split(",")
+        fields[6] = "abc"  # heading of line 5
+        nav[4] = ",".join(fields)
+        pings = "\n".join(read("pings.csv").decode().split("\n")[:2000]) + "\n"
+        pings = pings.replace("\n", "\n12x,0,1,2,3\n", 1)  # line 2: a bad time
+        self.upload(survey_id, "survey.json", read("survey.json"))
+        self.upload(survey_id, "nav.csv", "\n".join(nav).encode())
+        self.upload(survey_id, "pings.csv", pings.encode())
+        details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.FinalizeSurvey,
+                                   survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("nav.csv:5: heading:", details)
+        self.assertIn("pings.csv:2: time:", details)
+        survey = self.surveys.GetSurvey(survey_pb2.GetSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(survey.state, survey_pb2.Survey.UPLOADING)
+        self.assertIn(("nav.csv", 5, "heading"), [(p.file, p.line, p.field) for p in survey.problems])
+        self.assert_code(grpc.StatusCode.FAILED_PRECONDITION, self.jobs.SubmitJob,
+                         job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp"))
+
+    def test_bad_requests_name_the_field(self):
+        self.assertIn("crs", self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.CreateSurvey,
+                                              survey_pb2.CreateSurveyRequest(name="x", crs="EPSG:4326")))
+        self.assertIn("name", self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.CreateSurvey,
+                                               survey_pb2.CreateSurveyRequest(name="")))
+        self.create("twice")
+        self.assert_code(grpc.StatusCode.ALREADY_EXISTS, self.surveys.CreateSurvey, survey_pb2.CreateSurveyRequest(name="twice"))
+        self.assert_code(grpc.StatusCode.NOT_FOUND, self.surveys.GetSurvey, survey_pb2.GetSurveyRequest(survey_id=999999))
+        self.assert_code(grpc.StatusCode.NOT_FOUND, self.jobs.GetJob, job_pb2.GetJobRequest(job_id=999999))
+        self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.ListSurveys,
+                         survey_pb2.ListSurveysRequest(page_token="nonsense"))
+        survey_id = self.create("bad jobs")
+        for configuration, parameters, field in [("mchs", {}, "configuration"), ("", {}, "configuration"),
+                                                 ("gicp", {"gicp.max_iterations": "0"}, "parameters[gicp.max_iterations]"),
+                                                 ("gicp", {"no.such": "1"}, "parameters[no.such]")]:
+            details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.jobs.SubmitJob,
+                                       job_pb2.SubmitJobRequest(survey_id=survey_id, configuration=configuration,
+                                                                parameters=parameters))
+            self.assertTrue(details.startswith(field + ":"), details)
+        self.assert_code(grpc.StatusCode.FAILED_PRECONDITION, self.jobs.SubmitJob,
+                         job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp"))
+        pages = self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(page_size=1), timeout=30)
+        self.assertEqual(len(pages.surveys), 1)
+        self.assertNotEqual(pages.next_page_token, "")
+
+    def test_cancelled_job_stops_within_two_seconds(self):
+        survey_id = self.ready_survey("cancel")
+        # A slow registration (many iterations on one thread), so the job is surely mid-stage.
+        slow = {"threads": "1", "gicp.max_iterations": "2000", "gicp.convergence": "1e-12"}
+        job = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp", parameters=slow))
+        self.watch(job.id, until=lambda e: e.stage == "register")
+        self.jobs.CancelJob(job_pb2.CancelJobRequest(job_id=job.id), timeout=30)
+        cancelled = time.monotonic()
+        # The one worker takes the next job only once it has stopped the cancelled one.
+        after = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="odometry"))
+        while self.jobs.GetJob(job_pb2.GetJobRequest(job_id=after.id)).state == job_pb2.QUEUED:
+            self.assertLess(time.monotonic() - cancelled, 10)
+            time.sleep(0.05)
+        stopped = time.monotonic() - cancelled
+        print(f"\ncancelled job: worker free after {stopped:.2f} s", file=sys.stderr)
+        self.assertLess(stopped, 2.0)
+        self.assertEqual(self.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id)).state, job_pb2.CANCELLED)
+        self.assert_code(grpc.StatusCode.FAILED_PRECONDITION, self.jobs.CancelJob, job_pb2.CancelJobRequest(job_id=job.id))
+        self.assert_code(grpc.StatusCode.FAILED_PRECONDITION, self.jobs.GetReport, job_pb2.GetReportRequest(job_id=job.id))
+        # A deadline shorter than the job: the watch ends with DEADLINE_EXCEEDED.
+        with self.assertRaises(grpc.RpcError) as raised:
+            self.watch(after.id, timeout=0.3)
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.DEADLINE_EXCEEDED)
+        self.assertEqual(self.watch(after.id)[-1].state, job_pb2.SUCCEEDED)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
