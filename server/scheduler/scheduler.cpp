@@ -152,6 +152,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const PipelineResult result = run_pipeline(
         *bundle.survey, config,
         [&](std::string_view stage, double fraction) {
+          if (stage == "done") return;  // the job is done once its results are stored
           if (stage == last_stage && fraction < 1 && Clock::now() - last_event < options_.progress_every) return;
           last_stage = stage;
           last_event = Clock::now();
@@ -160,9 +161,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     // What each stage produced, in the order of the pipeline, each in its own transaction.
+    constexpr int kStores = 4;
+    int stored = 0;
     auto store = [&](const char* what, const std::function<void()>& save) {
       if (cancel) throw Cancelled();
-      event("store", 0, what);
+      event("store", static_cast<double>(stored++) / kStores, what);
       save();
     };
     store("submaps", [&] {

@@ -88,9 +88,7 @@ grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJo
     if (!survey.ready)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
                     "survey_id: survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
-    int active = 0;
-    for (const storage::JobRecord& job : context_.jobs.list_jobs(tenant, std::nullopt, 0, context_.limits.max_active_jobs * 4))
-      active += finished(job.state) ? 0 : 1;
+    const int active = context_.jobs.active_jobs(tenant);
     if (active >= context_.limits.max_active_jobs)
       throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
                     std::to_string(active) + " jobs are queued or running; the limit is " +

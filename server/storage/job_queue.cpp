@@ -243,6 +243,15 @@ std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional
       {tenant_id, survey_id, before_id, limit}));
 }
 
+int JobQueue::active_jobs(std::int64_t tenant_id) {
+  auto connection = pool_.acquire();
+  return static_cast<int>(connection
+                              ->exec("SELECT count(*) FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+                                     " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
+                                     {tenant_id})
+                              .int64(0, 0));
+}
+
 std::vector<StoredJobEvent> JobQueue::events_after(std::int64_t job_id, std::int64_t after_event_id) {
   auto connection = pool_.acquire();
   Result rows = connection->exec(

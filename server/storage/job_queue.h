@@ -121,6 +121,7 @@ class JobQueue {
   // A tenant's jobs, newest first, below `before_id` (0: from the newest), of one survey or all.
   std::vector<JobRecord> list_jobs(std::int64_t tenant_id, std::optional<std::int64_t> survey_id,
                                    std::int64_t before_id, int limit);
+  int active_jobs(std::int64_t tenant_id);  // queued or running
   std::vector<StoredJobEvent> events_after(std::int64_t job_id, std::int64_t after_event_id);
 
  private:

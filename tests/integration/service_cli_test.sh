@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # The CLI against a real server and PostgreSQL: an upload cut in the middle and resumed, a gicp
-# job submitted, watched and reported, tiles and map asked for, tokens.
+# job submitted, watched and reported, the job limit, tiles and map asked for, tokens.
 set -euo pipefail
 source "$(dirname "$0")/test_database.sh" service_cli
 
-"$BATHYSLAM_SERVER_BIN" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant cli \
+"$BATHYSLAM_SERVER_BIN" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant cli --max-active-jobs 1 \
   > "$work/server.out" 2> "$work/server.log" &
 server_pid=$!
 for _ in $(seq 100); do grep -q "listening" "$work/server.out" && break; sleep 0.1; done
@@ -28,6 +28,9 @@ fi
 grep -q "INVALID_ARGUMENT: parameters\[gicp.max_iterations\]" "$work/bad.err" || fail "$(cat "$work/bad.err")"
 
 job=$("$BATHYSLAM" submit "$survey" --config gicp | awk '/^job/ {print $2}')
+# One active job per tenant on this server: a second one while the first runs is refused.
+if "$BATHYSLAM" submit "$survey" --config odometry 2> "$work/limit.err"; then fail "over the job limit"; fi
+grep -q "RESOURCE_EXHAUSTED" "$work/limit.err" || fail "$(cat "$work/limit.err")"
 "$BATHYSLAM" watch "$job" > "$work/watch" 2> "$work/watch.err" || fail "watch: $(cat "$work/watch" "$work/watch.err")"
 grep -q "job $job succeeded" "$work/watch" || fail "$(cat "$work/watch")"
 for stage in load submaps register graph eval store; do
