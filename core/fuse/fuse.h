@@ -35,6 +35,7 @@ class GridFuser {
   std::uint64_t soundings() const { return soundings_; }
   // Cells held in memory (whole blocks), whatever the number of soundings added.
   std::size_t allocated_cells() const { return blocks_.size() * kBlockSize * kBlockSize; }
+  std::size_t allocated_bytes() const { return allocated_cells() * sizeof(Cell); }
 
  private:
   static constexpr int kBlockBits = 6;

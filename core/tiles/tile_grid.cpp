@@ -68,20 +68,32 @@ GridRaster coarsen(const GridRaster& fine) {
   return out;
 }
 
-void for_each_tile(const GridRaster& level0, const std::function<void(const TileId&, const GridRaster&)>& visit) {
+void for_each_level(const GridRaster& level0,
+                    const std::function<void(int level, const GridRaster& raster, const std::vector<TileId>& tiles)>& visit) {
   if (level0.valid_cells() == 0) return;
   const GridRaster* level = &level0;
   GridRaster coarser;
   for (int l = 0;; ++l) {
     const std::vector<TileId> ids = tiles_overlapping(level->geometry, l);
-    for (const TileId& id : ids) {
-      const GridRaster tile = crop(*level, tile_geometry(id, level0.geometry.resolution_m));
-      if (tile.valid_cells() > 0) visit(id, tile);
-    }
+    visit(l, *level, ids);
     if (ids.size() <= 1) return;
     coarser = coarsen(*level);
     level = &coarser;
   }
+}
+
+std::optional<GridRaster> cut_tile(const GridRaster& level, const TileId& id, double level0_resolution_m) {
+  GridRaster tile = crop(level, tile_geometry(id, level0_resolution_m));
+  if (tile.valid_cells() == 0) return std::nullopt;
+  return tile;
+}
+
+void for_each_tile(const GridRaster& level0, const std::function<void(const TileId&, const GridRaster&)>& visit) {
+  for_each_level(level0, [&](int, const GridRaster& level, const std::vector<TileId>& ids) {
+    for (const TileId& id : ids) {
+      if (const std::optional<GridRaster> tile = cut_tile(level, id, level0.geometry.resolution_m)) visit(id, *tile);
+    }
+  });
 }
 
 }  // namespace bathyslam

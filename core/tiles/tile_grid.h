@@ -8,6 +8,7 @@
 // of a level are exactly tile (c, r) of the next.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "core/fuse/grid.h"
@@ -33,8 +34,15 @@ std::vector<TileId> tiles_overlapping(const GridGeometry& geometry, int level);
 // standard deviation of the pooled soundings); NaN where none is valid.
 GridRaster coarsen(const GridRaster& fine);
 
-// Visits every tile holding at least one valid cell, level by level from `level0` up to the first
-// level that fits in one tile. Only one level and one tile are in memory besides `level0`.
+// Visits the pyramid's levels, from `level0` up to the first level that fits in one tile, each
+// with the tiles that overlap it. Only one level is in memory besides `level0`.
+void for_each_level(const GridRaster& level0,
+                    const std::function<void(int level, const GridRaster& raster, const std::vector<TileId>& tiles)>& visit);
+
+// The tile `id` cut from its level's raster; nothing when it holds no valid cell.
+std::optional<GridRaster> cut_tile(const GridRaster& level, const TileId& id, double level0_resolution_m);
+
+// Visits every tile holding at least one valid cell, level by level (for_each_level), one tile at a time.
 void for_each_tile(const GridRaster& level0, const std::function<void(const TileId&, const GridRaster&)>& visit);
 
 }  // namespace bathyslam

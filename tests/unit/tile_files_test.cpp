@@ -196,6 +196,18 @@ TEST_F(TileFiles, PyramidWritesATifAndAVdbPerTileNamedLevelColRow) {
   GDALClose(GDALDataset::ToHandle(ds));
 }
 
+TEST_F(TileFiles, PyramidWriteFailureNamesTheTileFile) {
+  // A folder where a tile's GeoTIFF should go: the tile writers (on several threads) must report it.
+  const fs::path blocked = dir_ / "tiles" / "0" / "1765_18085.tif";
+  fs::create_directories(blocked);
+  try {
+    write_tile_files(sample_map(), "EPSG:32651", dir_ / "tiles");
+    FAIL() << "wrote a tile over a folder";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(blocked.string()), std::string::npos) << e.what();
+  }
+}
+
 // Counts pixels of the image by what they look like.
 struct PixelKinds {
   int white = 0, bluish = 0, reddish = 0;
