@@ -36,6 +36,12 @@ void write_vdb(const GridRaster& raster, std::string_view crs, const std::filesy
   std::call_once(initialized, [] { openvdb::initialize(); });
 
   const GridGeometry& g = raster.geometry;
+  // OpenVDB coordinates are 32-bit; the lattice's indices stay far inside that for any projected
+  // CRS at centimetre cells, but a bad resolution must not wrap silently.
+  constexpr std::int64_t kMax = std::numeric_limits<openvdb::Int32>::max(), kMin = std::numeric_limits<openvdb::Int32>::min();
+  if (g.left < kMin || g.right() > kMax || g.bottom() < kMin || g.top > kMax) {
+    throw std::runtime_error(path.string() + ": cannot write OpenVDB file: cell indices exceed 32 bits");
+  }
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   openvdb::FloatGrid::Ptr elevation = openvdb::FloatGrid::create(kNaN);
   openvdb::FloatGrid::Ptr uncertainty = openvdb::FloatGrid::create(kNaN);

@@ -171,6 +171,13 @@ TEST_F(TileFiles, VdbReadsBackWithValuesTransformAndMetadata) {
   EXPECT_EQ(count->metaValue<std::string>("crs"), "EPSG:32651");
 }
 
+TEST_F(TileFiles, VdbRefusesCellIndicesBeyondItsCoordinates) {
+  GridRaster far = GridRaster::no_data({0.001, 3'000'000'000, 10, 1, 1});  // easting 3000 km in 1 mm cells
+  far.elevation[0] = -10;
+  far.count[0] = 3;
+  EXPECT_THROW(write_vdb(far, "EPSG:32651", dir_ / "far.vdb"), std::runtime_error);
+}
+
 TEST_F(TileFiles, PyramidWritesATifAndAVdbPerTileNamedLevelColRow) {
   const GridRaster map = sample_map();  // 300 m × 150 m from easting 452050: two level-0 tiles wide
   const TileFileCount written = write_tile_files(map, "EPSG:32651", dir_ / "tiles");
