@@ -1,9 +1,9 @@
 #include "core/pipeline/report.h"
 
 #include <cstdio>
-#include <fstream>
 
 #include "core/eval/plots.h"
+#include "core/io/file_bytes.h"
 
 namespace bathyslam {
 namespace {
@@ -52,12 +52,6 @@ nlohmann::json registrations_json(const PipelineResult& r) {
     list.push_back(std::move(j));
   }
   return list;
-}
-
-void write_file(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
 }
 
 }  // namespace
@@ -113,7 +107,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     for (std::size_t i = 0; i < h.counts.size(); ++i) s.points.emplace_back(i * h.bin_width, static_cast<double>(h.counts[i]));
     return s;
   };
-  write_file(dir / "consistency_histogram.png",
+  write_file_bytes(dir / "consistency_histogram.png",
              plot_png({"Consistency error (" + to_string(r.config.configuration) + ")", "consistency error (m)",
                        "cells"},
                       {histogram_series(r.dr_consistency.histogram, "dead reckoning", 230, 120, 120),
@@ -124,7 +118,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     for (std::size_t i = 0; i < errors.size(); ++i) s.points.emplace_back(static_cast<double>(i), errors[i]);
     return s;
   };
-  write_file(dir / "trajectory_error.png",
+  write_file_bytes(dir / "trajectory_error.png",
              plot_png({"Horizontal error against the reference", "submap (pose index)", "error (m)"},
                       {per_pose(r.dr_trajectory_errors, "dead reckoning", 220, 60, 60),
                        per_pose(r.trajectory_errors, "optimized", 40, 90, 200)}));
@@ -137,7 +131,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     dr.points.emplace_back(r.dr_poses[i].translation().head<2>());
     optimized.points.emplace_back(r.optimized_poses[i].translation().head<2>());
   }
-  write_file(dir / "trajectory.png",
+  write_file_bytes(dir / "trajectory.png",
              plot_png({"Trajectory (submap poses)", "east of local origin (m)", "north of local origin (m)", true},
                       {reference, dr, optimized}));
 }
