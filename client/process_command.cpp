@@ -96,8 +96,8 @@ void add_process_command(CLI::App& app) {
   auto options = std::make_shared<ProcessOptions>();
   CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey bundle offline");
   cmd->add_option("bundle", options->bundle, "survey bundle folder")->required();
-  cmd->add_option("--config", options->config, "odometry or gicp")
-      ->check(CLI::IsMember({"odometry", "gicp"}))
+  cmd->add_option("--config", options->config, "odometry, gicp or mchs")
+      ->check(CLI::IsMember({"odometry", "gicp", "mchs"}))
       ->capture_default_str();
   cmd->add_option("--set", options->sets, "override a parameter: key=value (repeatable)");
   cmd->add_option("--threads", options->threads, "registration threads (0: all cores)")->capture_default_str();
