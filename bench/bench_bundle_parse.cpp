@@ -4,12 +4,10 @@
 //   bench_bundle_parse                   simulate `lake` seed 1 into a temporary folder first
 #include <benchmark/benchmark.h>
 
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
 
+#include "bench/lake_bundle.h"
 #include "core/io/bundle.h"
-#include "core/sim/simulator.h"
 
 namespace {
 
@@ -46,23 +44,7 @@ BENCHMARK(BM_ReadBundle)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--bundle") == 0) {
-      g_bundle = argv[i + 1];
-      for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
-      argc -= 2;
-      break;
-    }
-  }
-  if (g_bundle.empty()) {
-    g_bundle = fs::temp_directory_path() / "bathyslam_bench_lake";
-    if (!fs::exists(g_bundle / bathyslam::kPingsFile)) {
-      std::fprintf(stderr, "simulating lake (seed 1) into %s ...\n", g_bundle.c_str());
-      bathyslam::sim::SimulationConfig config;
-      config.scenario = bathyslam::sim::Scenario::kLake;
-      bathyslam::write_bundle(bathyslam::sim::simulate(config).survey, g_bundle);
-    }
-  }
+  g_bundle = bathyslam::bench::lake_bundle(argc, argv);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

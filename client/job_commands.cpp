@@ -113,6 +113,16 @@ void print_stats(const char* label, const v1::ErrorStats& s, const v1::ErrorStat
               s.mean(), s.p95(), s.p99(), s.max(), static_cast<long long>(s.count()), dr.rmse(), dr.p95());
 }
 
+void print_constraints(const char* heading, const google::protobuf::RepeatedPtrField<v1::ConstraintStats>& groups) {
+  std::printf("\n%-14s %10s %9s %9s  %s\n", heading, "candidates", "accepted", "rejected", "rejection reasons");
+  for (const v1::ConstraintStats& c : groups) {
+    std::string reasons;
+    for (const auto& [reason, n] : c.rejection_reasons()) reasons += reason + " (" + std::to_string(n) + ") ";
+    std::printf("%-14s %10lld %9lld %9lld  %s\n", c.name().c_str(), static_cast<long long>(c.candidates()),
+                static_cast<long long>(c.accepted()), static_cast<long long>(c.rejected()), reasons.c_str());
+  }
+}
+
 void run_report(const JobOptions& o) {
   v1::GetReportRequest request;
   request.set_job_id(o.job);
@@ -134,13 +144,8 @@ void run_report(const JobOptions& o) {
     std::printf("%-22s %9s %9s %9s %9s %9s %9s\n", "error (m)", "rmse", "mean", "p95", "p99", "max", "count");
     print_stats("consistency", report.consistency(), report.consistency_dr());
     print_stats("trajectory", report.trajectory(), report.trajectory_dr());
-    std::printf("\n%-10s %10s %9s %9s  %s\n", "constraint", "candidates", "accepted", "rejected", "rejection reasons");
-    for (const v1::ConstraintStats& c : report.constraints()) {
-      std::string reasons;
-      for (const auto& [reason, n] : c.rejection_reasons()) reasons += reason + " (" + std::to_string(n) + ") ";
-      std::printf("%-10s %10lld %9lld %9lld  %s\n", c.type().c_str(), static_cast<long long>(c.candidates()),
-                  static_cast<long long>(c.accepted()), static_cast<long long>(c.rejected()), reasons.c_str());
-    }
+    print_constraints("constraint", report.constraints_by_type());
+    if (report.constraints_by_path_size() > 0) print_constraints("path", report.constraints_by_path());
   }
   if (!o.out.empty())
     std::fprintf(stderr, "saved report.json and %d plots in %s\n", report.plots_size(), o.out.c_str());
@@ -152,7 +157,7 @@ void add_job_commands(CLI::App& app) {
   auto submit = std::make_shared<SubmitOptions>();
   CLI::App* cmd = app.add_subcommand("submit", "Submit a SLAM job on an uploaded survey; prints the job id");
   cmd->add_option("survey", submit->survey, "survey id (from upload)")->required();
-  cmd->add_option("--config", submit->config, "odometry or gicp (mchs when the core has it)")->capture_default_str();
+  cmd->add_option("--config", submit->config, "odometry, gicp or mchs")->capture_default_str();
   cmd->add_option("--set", submit->sets, "override a parameter: key=value (repeatable)");
   add_remote_options(cmd, submit->remote);
   cmd->callback([submit] { run_submit(*submit); });

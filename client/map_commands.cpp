@@ -54,13 +54,14 @@ const char* extension(v1::TileFormat format) {
   return format == v1::GEOTIFF ? ".tif" : format == v1::VDB ? ".vdb" : ".png";
 }
 
-// Whether a tile meets the box. Tiles are `tile_size_cells` cells of `resolution_m << level`
-// metres; columns count east from min_easting, rows south from max_northing (as in GDAL).
+// Whether a tile meets the box. Tile (level, col, row) is the square of side
+// `tile_size_cells` cells of `resolution_m << level` metres whose south-west corner is (col, row)
+// times that side from the CRS origin (rows count northward, as in TMS; core/tiles/tile_grid.h).
 bool meets(const v1::MapInfo& info, const v1::TileRef& tile, const std::vector<double>& box) {
   if (box.empty()) return true;
-  const double size = info.resolution_m() * (1 << tile.level()) * info.tile_size_cells();
-  const double west = info.min_easting() + tile.col() * size, north = info.max_northing() - tile.row() * size;
-  return west < box[2] && west + size > box[0] && north - size < box[3] && north > box[1];
+  const double side = info.resolution_m() * (1 << tile.level()) * info.tile_size_cells();
+  const double west = tile.col() * side, south = tile.row() * side;
+  return west < box[2] && west + side > box[0] && south < box[3] && south + side > box[1];
 }
 
 void run_tiles(const MapOptions& o) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's main-job command: the whole product on this machine. Builds, starts a private
 # PostgreSQL (scripts/pg.sh) and bathyslam-server, simulates the `small` survey, uploads it,
-# runs a `gicp` job (`mchs` once the core has it), watches it, saves the report and the map
+# runs an `mchs` job, watches it, saves the report and the map
 # tiles, prints where they are, and stops the server and PostgreSQL.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,13 +30,14 @@ export BATHYSLAM_SERVER
 "$bin/client/bathyslam" simulate --scenario small --seed 1 --drift paper --out "$out/small"
 "$bin/client/bathyslam" inspect --json "$out/small" > "$out/small-summary.json"
 survey=$("$bin/client/bathyslam" upload "$out/small" | awk '/^survey/ {print $2}')
-job=$("$bin/client/bathyslam" submit "$survey" --config gicp | awk '/^job/ {print $2}')
+job=$("$bin/client/bathyslam" submit "$survey" --config mchs | awk '/^job/ {print $2}')
 "$bin/client/bathyslam" watch "$job"
 mkdir -p "$out/job-$job"
 "$bin/client/bathyslam" report "$job" --out "$out/job-$job" | tee "$out/job-$job/report.txt"
 "$bin/client/bathyslam" tiles "$job" --out "$out/job-$job/tiles"
+"$bin/client/bathyslam" map "$job" --out "$out/job-$job/map.tif"
 echo
 echo "bundle:      $out/small (summary $out/small-summary.json)"
 echo "report:      $out/job-$job (report.txt, report.json, *.png)"
-echo "tiles:       $out/job-$job/tiles (empty until map fusion lands)"
+echo "tiles:       $out/job-$job/tiles/{level}/{col}_{row}.tif; whole map $out/job-$job/map.tif"
 echo "server log:  $out/server.log; database: $pg (bash scripts/pg.sh start $pg to look inside)"

@@ -64,21 +64,22 @@ double overlap_area_m2(const Footprint& a, const Footprint& b) {
   return cv::intersectConvexConvex(polygon(a), polygon(b), intersection, true);
 }
 
-std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
-                                                    const std::vector<Eigen::Isometry3d>& poses,
-                                                    const CandidateConfig& config) {
+namespace {
+
+// Every pair (earlier, later) that `wanted` admits and whose footprints overlap by at least
+// `min_fraction` of the smaller one, found through a grid index over the footprints.
+template <typename Wanted>
+std::vector<CandidatePair> overlapping_pairs(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                             double min_fraction, Wanted&& wanted) {
   std::vector<Footprint> footprints;
   std::unordered_map<int64_t, std::vector<int>> grid;
   for (const Submap& s : set.submaps) {
     footprints.push_back(footprint_of(s, poses[s.index]));
-    if (s.line < 0) continue;
     for (int64_t cell : cells_of(footprints.back())) grid[cell].push_back(s.index);
   }
-
   std::vector<CandidatePair> pairs;
   std::vector<int> near;
   for (const Submap& s : set.submaps) {
-    if (s.line < 0) continue;
     near.clear();
     for (int64_t cell : cells_of(footprints[s.index])) {
       const auto it = grid.find(cell);
@@ -90,14 +91,30 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
     std::sort(near.begin(), near.end());
     near.erase(std::unique(near.begin(), near.end()), near.end());
     for (int other : near) {
-      if (!on_adjacent_lines(set, other, s.index, config)) continue;
+      if (!wanted(other, s.index)) continue;
       const double smaller = std::min(footprints[other].area_m2, footprints[s.index].area_m2);
       if (smaller <= 0) continue;
       const double fraction = overlap_area_m2(footprints[other], footprints[s.index]) / smaller;
-      if (fraction >= config.min_overlap_fraction) pairs.push_back({other, s.index, fraction});
+      if (fraction >= min_fraction) pairs.push_back({other, s.index, fraction});
     }
   }
   return pairs;
+}
+
+}  // namespace
+
+std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
+                                                    const std::vector<Eigen::Isometry3d>& poses,
+                                                    const CandidateConfig& config) {
+  return overlapping_pairs(set, poses, config.min_overlap_fraction,
+                           [&](int a, int b) { return on_adjacent_lines(set, a, b, config); });
+}
+
+std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                           const CandidateConfig& config) {
+  return overlapping_pairs(set, poses, config.min_overlap_fraction, [&](int a, int b) {
+    return std::abs(a - b) >= config.loop_min_submap_gap && !on_adjacent_lines(set, a, b, config);
+  });
 }
 
 }  // namespace bathyslam

@@ -27,6 +27,8 @@ struct CandidateConfig {
   // Intersection over the smaller footprint. Table 1's "overlap coverage 0.9" cannot hold between
   // lawnmower lines that share only ~40 % of a swath; see the README.
   double min_overlap_fraction = 0.1;
+  // Loop candidates: submaps this many apart in time or more (nearer ones are odometry's).
+  int loop_min_submap_gap = 5;
 };
 
 // Whether submaps `a` and `b` lie on distinct survey lines at most K apart that run parallel or
@@ -44,5 +46,11 @@ struct CandidatePair {
 std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
                                                     const std::vector<Eigen::Isometry3d>& poses,
                                                     const CandidateConfig& config = {});
+
+// Loop-closure candidates: pairs whose footprints (at `poses`) overlap enough but that are not
+// on K-adjacent parallel lines (check lines crossing the lawnmower, revisits, turns), and are
+// far enough apart in time.
+std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                           const CandidateConfig& config = {});
 
 }  // namespace bathyslam

@@ -24,6 +24,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("candidates.k_adjacent_lines", c.candidates.k_adjacent_lines, 1, 100);
   visit("candidates.parallel_tolerance_deg", c.candidates.parallel_tolerance_deg, 0, 90);
   visit("candidates.min_overlap_fraction", c.candidates.min_overlap_fraction, 0, 1);
+  visit("candidates.loop_min_submap_gap", c.candidates.loop_min_submap_gap, 1, 100000);
   visit("gicp.max_correspondence_m", c.gicp.max_correspondence_m, 0.01, 100);
   visit("gicp.max_iterations", c.gicp.max_iterations, 1, 10000);
   visit("gicp.convergence", c.gicp.convergence, 1e-12, 1);
@@ -45,6 +46,31 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("graph.dr_sigma_yaw_rad", c.graph.dr_sigma_rotation_rad.z(), 1e-8, 10);
   visit("graph.huber_delta", c.graph.huber_delta, 1e-3, 1e3);
   visit("graph.max_iterations", c.graph.max_iterations, 1, 10000);
+  visit("grid.cell_m", c.grid.cell_m, 0.05, 20);
+  visit("grid.idw_radius_cells", c.grid.idw_radius_cells, 0.5, 10);
+  visit("keypoints.percentile", c.keypoints.percentile, 0, 100);
+  visit("keypoints.descriptor_size", c.keypoints.descriptor_size, 3, 63);
+  visit("keypoints.min_tsd_m", c.keypoints.min_tsd_m, 0, 100);
+  visit("keypoints.suppression_radius", c.keypoints.suppression_radius, 0, 50);
+  visit("matching.max_distance_m", c.matching.max_distance_m, 0.1, 1000);
+  visit("matching.min_ncc", c.matching.min_ncc, -1, 1);
+  visit("matching.ratio", c.matching.ratio, 0.01, 1);
+  visit("matching.min_matches", c.matching.min_matches, 3, 100000);
+  visit("ransac.max_iterations", c.ransac.max_iterations, 1, 1000000);
+  visit("ransac.initial_threshold_m", c.ransac.initial_threshold_m, 0.01, 100);
+  visit("ransac.min_threshold_m", c.ransac.min_threshold_m, 0.001, 100);
+  visit("ransac.target_inlier_ratio", c.ransac.target_inlier_ratio, 0.01, 1);
+  visit("switch.min_feature_density", c.switching.min_feature_density, 0, 1);
+  visit("accept.min_inlier_ratio", c.acceptance.min_inlier_ratio, 0, 1);
+  visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
+  visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
+  visit("accept.max_translation_m", c.acceptance.max_translation_m, 0, 100000);
+  visit("quality.sigma_x_m", c.quality.best_sigma_translation_m.x(), 1e-4, 1e3);
+  visit("quality.sigma_y_m", c.quality.best_sigma_translation_m.y(), 1e-4, 1e3);
+  visit("quality.sigma_z_m", c.quality.best_sigma_translation_m.z(), 1e-4, 1e3);
+  visit("quality.sigma_roll_rad", c.quality.best_sigma_rotation_rad.x(), 1e-6, 10);
+  visit("quality.sigma_pitch_rad", c.quality.best_sigma_rotation_rad.y(), 1e-6, 10);
+  visit("quality.sigma_yaw_rad", c.quality.best_sigma_rotation_rad.z(), 1e-6, 10);
   visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
   visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
   visit("threads", c.threads, 0, 1024);
@@ -68,39 +94,77 @@ void check(const std::atomic<bool>* cancel) {
   if (cancel != nullptr && cancel->load()) throw Cancelled();
 }
 
+struct TypedPair {
+  CandidatePair pair;
+  ConstraintType type = ConstraintType::kAdjacent;
+};
+
+// A registration's constraint, with DR roll and pitch kept (keep_dr_roll_pitch) and the
+// switch's record; acceptance and information are the configuration's to set.
+Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, const Eigen::Isometry3d& guess) {
+  Constraint c;
+  c.type = typed.type;
+  c.from = typed.pair.target;
+  c.to = typed.pair.source;
+  c.measured = keep_dr_roll_pitch(reg.registration.source_to_target, guess, reg.anchor);
+  c.anchor = reg.anchor;
+  c.quality = reg.registration.quality;
+  c.overlap_fraction = typed.pair.overlap_fraction;
+  c.path = to_string(reg.path);
+  c.path_reason = reg.why;
+  c.feature_density = reg.feature_density;
+  c.matches = reg.matches;
+  c.inlier_ratio = reg.inlier_ratio;
+  return c;
+}
+
+// `gicp`: direct GICP from dead reckoning, every converged registration kept with the same
+// information, as in the paper's baseline.
+Constraint register_uniform(const PipelineResult& r, const TypedPair& typed, const std::vector<Cloud::Ptr>& clouds,
+                            const PipelineConfig& config) {
+  const CandidatePair& pair = typed.pair;
+  const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
+  const PairRegistration reg = register_direct(*clouds[pair.target], *clouds[pair.source], guess, config.gicp, 1.0);
+  Constraint c = constraint_of(typed, reg, guess);
+  c.information = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
+  c.accepted = c.quality.converged && c.quality.overlap_points > 0;
+  if (!c.quality.converged) c.reason = "GICP did not converge";
+  else if (c.quality.overlap_points == 0) c.reason = "no overlapping points";
+  return c;
+}
+
+// `mchs`: the switch picks direct or feature-aided registration; acceptance decides whether the
+// result becomes an edge, and its quality how much the edge weighs.
+Constraint register_mchs(const PipelineResult& r, const TypedPair& typed, const std::vector<Cloud::Ptr>& clouds,
+                         const std::vector<SubmapFeatures>& features, const PipelineConfig& config) {
+  const CandidatePair& pair = typed.pair;
+  const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
+  const CoarseToFineConfig c2f{config.switching, config.matching, config.ransac, config.gicp, 1.0};
+  const uint64_t seed = config.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
+  const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
+                                                       features[pair.source], guess, c2f, seed);
+  Constraint c = constraint_of(typed, reg, guess);
+  c.reason = rejection_reason(reg, guess, config.acceptance, typed.type == ConstraintType::kLoop);
+  c.accepted = c.reason.empty();
+  if (c.accepted) c.information = quality_information(reg, config.switching.min_feature_density, config.quality);
+  return c;
+}
+
 // Registers every candidate pair in parallel; results land in pair order.
-std::vector<Constraint> register_candidates(const PipelineResult& r, const std::vector<CandidatePair>& pairs,
-                                            const std::vector<Cloud::Ptr>& clouds, const PipelineConfig& config,
-                                            const ProgressFn& progress, const std::atomic<bool>* cancel) {
+std::vector<Constraint> register_pairs(const PipelineResult& r, const std::vector<TypedPair>& pairs,
+                                       const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
+                                       const PipelineConfig& config, const ProgressFn& progress,
+                                       const std::atomic<bool>* cancel) {
   std::vector<Constraint> constraints(pairs.size());
-  const Information6 uniform = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
   const int threads = config.threads > 0 ? config.threads : static_cast<int>(std::thread::hardware_concurrency());
   std::mutex progress_mutex;
   std::size_t finished = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (cancel != nullptr && cancel->load()) continue;
-    const CandidatePair& pair = pairs[k];
-    const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
-    const Cloud::Ptr target = crop_to_overlap(*clouds[pair.target], *clouds[pair.source], guess.inverse(), 1.0);
-    const Cloud::Ptr source = crop_to_overlap(*clouds[pair.source], *clouds[pair.target], guess, 1.0);
-    const Registration reg = register_gicp(target, source, guess, config.gicp);
-    Constraint& c = constraints[k];
-    c.type = ConstraintType::kAdjacent;
-    c.from = pair.target;
-    c.to = pair.source;
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const pcl::PointXYZ& p : *source) centroid += p.getVector3fMap().cast<double>();
-    if (!source->empty()) centroid /= static_cast<double>(source->size());
-    c.measured = keep_dr_roll_pitch(reg.source_to_target, guess, centroid);
-    c.anchor = centroid;
-    c.quality = reg.quality;
-    c.overlap_fraction = pair.overlap_fraction;
-    c.information = uniform;
-    // The baseline keeps every registration GICP reports as converged with some overlap.
-    c.accepted = reg.quality.converged && reg.quality.overlap_points > 0;
-    if (!reg.quality.converged) c.reason = "GICP did not converge";
-    else if (reg.quality.overlap_points == 0) c.reason = "no overlapping points";
+    constraints[k] = config.configuration == Configuration::kMchs
+                         ? register_mchs(r, pairs[k], clouds, features, config)
+                         : register_uniform(r, pairs[k], clouds, config);
     if (progress) {
       std::lock_guard lock(progress_mutex);
       progress("register", static_cast<double>(++finished) / pairs.size());
@@ -115,12 +179,27 @@ std::vector<Constraint> register_candidates(const PipelineResult& r, const std::
 Configuration parse_configuration(const std::string& name) {
   if (name == "odometry") return Configuration::kOdometry;
   if (name == "gicp") return Configuration::kGicp;
-  throw std::invalid_argument("unknown configuration '" + name + "' (expected odometry or gicp)");
+  if (name == "mchs") return Configuration::kMchs;
+  throw std::invalid_argument("unknown configuration '" + name + "' (expected odometry, gicp or mchs)");
 }
 
-std::string to_string(Configuration c) { return c == Configuration::kOdometry ? "odometry" : "gicp"; }
+std::string to_string(Configuration c) {
+  switch (c) {
+    case Configuration::kOdometry: return "odometry";
+    case Configuration::kGicp: return "gicp";
+    case Configuration::kMchs: return "mchs";
+  }
+  return "?";
+}
 
-std::string to_string(ConstraintType t) { return t == ConstraintType::kOdometry ? "odometry" : "adjacent"; }
+std::string to_string(ConstraintType t) {
+  switch (t) {
+    case ConstraintType::kOdometry: return "odometry";
+    case ConstraintType::kAdjacent: return "adjacent";
+    case ConstraintType::kLoop: return "loop";
+  }
+  return "?";
+}
 
 void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
   bool found = false;
@@ -184,7 +263,7 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
     r.constraints.push_back(c);
   }
 
-  if (config.configuration == Configuration::kGicp) {
+  if (config.configuration != Configuration::kOdometry) {
     report("filter", 0);
     std::vector<Cloud::Ptr> clouds(r.submaps.submaps.size());
 #pragma omp parallel for schedule(dynamic, 4)
@@ -192,12 +271,32 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
     clock.done("filter");
     check(cancel);
 
+    std::vector<SubmapFeatures> features;
+    if (config.configuration == Configuration::kMchs) {
+      report("features", 0);
+      features.resize(r.submaps.submaps.size());
+#pragma omp parallel for schedule(dynamic, 4)
+      for (std::size_t i = 0; i < features.size(); ++i) {
+        features[i] = extract_features(r.submaps.submaps[i], config.grid, config.keypoints);
+      }
+      clock.done("features");
+      check(cancel);
+    }
+
     report("candidates", 0);
-    const std::vector<CandidatePair> pairs = adjacent_line_candidates(r.submaps, r.dr_poses, config.candidates);
+    std::vector<TypedPair> pairs;
+    for (const CandidatePair& p : adjacent_line_candidates(r.submaps, r.dr_poses, config.candidates)) {
+      pairs.push_back({p, ConstraintType::kAdjacent});
+    }
+    if (config.configuration == Configuration::kMchs) {
+      for (const CandidatePair& p : loop_candidates(r.submaps, r.dr_poses, config.candidates)) {
+        pairs.push_back({p, ConstraintType::kLoop});
+      }
+    }
     clock.done("candidates");
 
     report("register", 0);
-    for (Constraint& c : register_candidates(r, pairs, clouds, config, progress, cancel)) r.constraints.push_back(c);
+    for (Constraint& c : register_pairs(r, pairs, clouds, features, config, progress, cancel)) r.constraints.push_back(c);
     clock.done("register");
   }
 

@@ -9,16 +9,18 @@
 #include <string_view>
 #include <vector>
 
+#include "core/accept/acceptance.h"
 #include "core/candidates/candidates.h"
 #include "core/eval/metrics.h"
 #include "core/filter/voxel_filter.h"
 #include "core/graph/pose_graph.h"
+#include "core/register/coarse_to_fine.h"
 #include "core/register/gicp.h"
 #include "core/submaps/submap.h"
 
 namespace bathyslam {
 
-enum class Configuration { kOdometry, kGicp };
+enum class Configuration { kOdometry, kGicp, kMchs };
 Configuration parse_configuration(const std::string& name);  // throws std::invalid_argument
 std::string to_string(Configuration configuration);
 
@@ -33,6 +35,14 @@ struct PipelineConfig {
   // `gicp`: every registration edge gets the same information, as in the paper's baseline.
   Eigen::Vector3d gicp_sigma_translation_m{0.5, 0.5, 0.2};
   Eigen::Vector3d gicp_sigma_rotation_rad{0.01, 0.01, 0.01};
+  // `mchs`: the feature-aided path, the switch, loop closures, acceptance and quality weights.
+  GridConfig grid;
+  KeypointConfig keypoints;
+  MatchConfig matching;
+  RansacConfig ransac;
+  SwitchConfig switching;
+  AcceptanceConfig acceptance;
+  QualityConfig quality;
   int threads = 0;  // 0: all cores
 };
 
@@ -42,7 +52,7 @@ void set_parameter(PipelineConfig& config, const std::string& name, const std::s
 // Every parameter by name with its current value.
 std::map<std::string, double> parameters(const PipelineConfig& config);
 
-enum class ConstraintType { kOdometry, kAdjacent };
+enum class ConstraintType { kOdometry, kAdjacent, kLoop };
 std::string to_string(ConstraintType type);
 
 struct Constraint {
@@ -53,6 +63,12 @@ struct Constraint {
   Information6 information = Information6::Identity();
   RegistrationQuality quality;   // registrations only
   double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time
+  // `mchs` registrations: the path the switch chose and why, and the feature statistics.
+  std::string path;              // "direct" or "feature-aided"
+  std::string path_reason;
+  double feature_density = 0;
+  int matches = 0;
+  double inlier_ratio = 0;
   bool accepted = true;
   std::string reason;            // why a registration was rejected
 };

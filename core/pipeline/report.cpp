@@ -1,9 +1,9 @@
 #include "core/pipeline/report.h"
 
 #include <cstdio>
-#include <fstream>
 
 #include "core/eval/plots.h"
+#include "core/io/file_bytes.h"
 
 namespace bathyslam {
 namespace {
@@ -13,10 +13,18 @@ nlohmann::json stats_json(const ErrorStats& s) {
           {"p99", s.p99},   {"max", s.max},   {"count", s.count}};
 }
 
+// A reason without its numbers ("inlier ratio 0.21 < 0.25" -> "inlier ratio"), for counting.
+std::string kind_of(const std::string& reason) {
+  const std::size_t digit = reason.find_first_of("0123456789");
+  std::string kind = reason.substr(0, digit);
+  while (!kind.empty() && kind.back() == ' ') kind.pop_back();
+  return kind;
+}
+
+// Candidates, accepted and rejected (with reasons) per constraint type and per registration path.
 nlohmann::json constraint_stats(const PipelineResult& r) {
   nlohmann::json by_type = nlohmann::json::object();
-  for (const Constraint& c : r.constraints) {
-    nlohmann::json& t = by_type[to_string(c.type)];
+  auto count = [](nlohmann::json& t, const Constraint& c) {
     if (t.is_null()) t = {{"candidates", 0}, {"accepted", 0}, {"rejected", 0}, {"rejection_reasons", nlohmann::json::object()}};
     t["candidates"] = t["candidates"].get<int>() + 1;
     if (c.accepted) {
@@ -24,10 +32,20 @@ nlohmann::json constraint_stats(const PipelineResult& r) {
     } else {
       t["rejected"] = t["rejected"].get<int>() + 1;
       nlohmann::json& reasons = t["rejection_reasons"];
-      reasons[c.reason] = reasons.value(c.reason, 0) + 1;
+      reasons[kind_of(c.reason)] = reasons.value(kind_of(c.reason), 0) + 1;
+    }
+  };
+  nlohmann::json by_path = nlohmann::json::object(), switch_decisions = nlohmann::json::object();
+  for (const Constraint& c : r.constraints) {
+    count(by_type[to_string(c.type)], c);
+    if (!c.path.empty()) count(by_path[c.path], c);
+    if (!c.path_reason.empty()) {
+      nlohmann::json& d = switch_decisions[c.path];
+      if (d.is_null()) d = nlohmann::json::object();
+      d[kind_of(c.path_reason)] = d.value(kind_of(c.path_reason), 0) + 1;
     }
   }
-  return by_type;
+  return {{"by_type", by_type}, {"by_path", by_path}, {"switch_decisions", switch_decisions}};
 }
 
 // Every registration with its quality, and its error against the reference where there is one.
@@ -43,6 +61,11 @@ nlohmann::json registrations_json(const PipelineResult& r) {
                         {"fitness", c.quality.fitness},
                         {"overlap_points", c.quality.overlap_points},
                         {"overlap_mse_m2", c.quality.overlap_mse_m2},
+                        {"path", c.path},
+                        {"path_reason", c.path_reason},
+                        {"feature_density", c.feature_density},
+                        {"matches", c.matches},
+                        {"inlier_ratio", c.inlier_ratio},
                         {"accepted", c.accepted},
                         {"reason", c.reason}};
     if (const auto e = relative_pose_error(r.submaps, c.from, c.to, c.measured)) {
@@ -52,12 +75,6 @@ nlohmann::json registrations_json(const PipelineResult& r) {
     list.push_back(std::move(j));
   }
   return list;
-}
-
-void write_file(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
 }
 
 }  // namespace
@@ -113,7 +130,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     for (std::size_t i = 0; i < h.counts.size(); ++i) s.points.emplace_back(i * h.bin_width, static_cast<double>(h.counts[i]));
     return s;
   };
-  write_file(dir / "consistency_histogram.png",
+  write_file_bytes(dir / "consistency_histogram.png",
              plot_png({"Consistency error (" + to_string(r.config.configuration) + ")", "consistency error (m)",
                        "cells"},
                       {histogram_series(r.dr_consistency.histogram, "dead reckoning", 230, 120, 120),
@@ -124,7 +141,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     for (std::size_t i = 0; i < errors.size(); ++i) s.points.emplace_back(static_cast<double>(i), errors[i]);
     return s;
   };
-  write_file(dir / "trajectory_error.png",
+  write_file_bytes(dir / "trajectory_error.png",
              plot_png({"Horizontal error against the reference", "submap (pose index)", "error (m)"},
                       {per_pose(r.dr_trajectory_errors, "dead reckoning", 220, 60, 60),
                        per_pose(r.trajectory_errors, "optimized", 40, 90, 200)}));
@@ -137,7 +154,7 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     dr.points.emplace_back(r.dr_poses[i].translation().head<2>());
     optimized.points.emplace_back(r.optimized_poses[i].translation().head<2>());
   }
-  write_file(dir / "trajectory.png",
+  write_file_bytes(dir / "trajectory.png",
              plot_png({"Trajectory (submap poses)", "east of local origin (m)", "north of local origin (m)", true},
                       {reference, dr, optimized}));
 }

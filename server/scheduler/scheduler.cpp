@@ -9,6 +9,8 @@
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "server/log.h"
+#include "server/scheduler/map_products.h"
+#include "server/scratch_dir.h"
 #include "server/storage/stored_bundle.h"
 
 namespace bathyslam::server {
@@ -79,17 +81,15 @@ PipelineConfig job_config(const storage::ClaimedJob& job, int threads) {
   return config;
 }
 
-storage::Report report_with_plots(const PipelineResult& result, const std::filesystem::path& scratch_root, std::int64_t job) {
-  const std::filesystem::path dir = scratch_root / ("report-" + std::to_string(job));
-  std::filesystem::create_directories(dir);
+storage::Report report_with_plots(const PipelineResult& result, const std::filesystem::path& scratch_root) {
+  const ScratchDir dir(scratch_root, "report");
   storage::Report report{report_json(result), {}};
-  write_report_plots(result, dir);
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+  write_report_plots(result, dir.path());
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
     std::ifstream in(entry.path(), std::ios::binary);
     report.plots[entry.path().filename().string()] =
         storage::Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
-  std::filesystem::remove_all(dir);
   return report;
 }
 
@@ -161,7 +161,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     // What each stage produced, in the order of the pipeline, each in its own transaction.
-    constexpr int kStores = 4;
+    constexpr int kStores = 5;
     int stored = 0;
     auto store = [&](const char* what, const std::function<void()>& save) {
       if (cancel) throw Cancelled();
@@ -176,14 +176,22 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       std::vector<storage::StoredConstraint> constraints;
       for (const Constraint& c : result.constraints)
         constraints.push_back({c, c.type == ConstraintType::kOdometry ? storage::RegistrationPath::kNone
+                                  : c.path == "feature-aided"         ? storage::RegistrationPath::kFeatureAided
                                                                       : storage::RegistrationPath::kDirect});
       results_.save_constraints(id, constraints);
     });
     store("optimized poses", [&] { results_.save_optimized_poses(id, result.optimized_poses); });
-    store("report", [&] { results_.save_report(id, report_with_plots(result, options_.scratch, id)); });
-    // Map fusion and tiles go here once core/fuse and core/tiles exist: fuse the optimized
-    // submaps into a grid, cut it into tiles (results_.put_tile for GEOTIFF/VDB/PNG, the whole
-    // COG as format "cog") and describe the grid (results_.save_map_grid); MapService serves them.
+    event("map", 0, "fusing and tiling");
+    const MapProducts map = make_map_products(result, bundle.survey->metadata, FuseConfig{}, options_.scratch);
+    store("tiles", [&] {
+      for (const auto& [key, bytes] : map.tiles) results_.put_tile(id, key, bytes);
+      if (map.grid.levels > 0) results_.save_map_grid(id, map.grid);
+    });
+    store("report", [&] {
+      storage::Report report = report_with_plots(result, options_.scratch);
+      report.plots.insert(map.plots.begin(), map.plots.end());
+      results_.save_report(id, report);
+    });
     event("done", 1);
     if (jobs_.succeed(lease)) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));

@@ -58,6 +58,19 @@ void stats(const nlohmann::json& s, v1::ErrorStats* out) {
   out->set_count(s.value("count", std::int64_t{0}));
 }
 
+// {"adjacent": {"candidates": .., "accepted": .., "rejected": .., "rejection_reasons": {..}}, ..}
+void constraint_stats(const nlohmann::json& groups, google::protobuf::RepeatedPtrField<v1::ConstraintStats>* out) {
+  for (const auto& [name, c] : groups.items()) {
+    v1::ConstraintStats* stats = out->Add();
+    stats->set_name(name);
+    stats->set_candidates(c.value("candidates", std::int64_t{0}));
+    stats->set_accepted(c.value("accepted", std::int64_t{0}));
+    stats->set_rejected(c.value("rejected", std::int64_t{0}));
+    const nlohmann::json reasons = c.value("rejection_reasons", nlohmann::json::object());  // named: items() refers to it
+    for (const auto& [reason, n] : reasons.items()) (*stats->mutable_rejection_reasons())[reason] = n.get<std::int64_t>();
+  }
+}
+
 // The effective configuration: defaults, then the overrides, each checked by name and range.
 PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
   PipelineConfig config;
@@ -192,18 +205,9 @@ grpc::Status JobService::GetReport(grpc::ServerContext* call, const v1::GetRepor
     reply->set_histogram_bin_width_m(histogram.value("bin_width_m", 0.0));
     for (const nlohmann::json& count : histogram.value("counts", nlohmann::json::array()))
       reply->add_histogram_counts(count.get<std::int64_t>());
-    // Named, not temporaries: items() refers to the object it iterates.
     const nlohmann::json constraints = r.value("constraints", nlohmann::json::object());
-    for (const auto& [type, c] : constraints.items()) {
-      v1::ConstraintStats* out = reply->add_constraints();
-      out->set_type(type);
-      out->set_candidates(c.value("candidates", std::int64_t{0}));
-      out->set_accepted(c.value("accepted", std::int64_t{0}));
-      out->set_rejected(c.value("rejected", std::int64_t{0}));
-      const nlohmann::json reasons = c.value("rejection_reasons", nlohmann::json::object());
-      for (const auto& [reason, n] : reasons.items())
-        (*out->mutable_rejection_reasons())[reason] = n.get<std::int64_t>();
-    }
+    constraint_stats(constraints.value("by_type", nlohmann::json::object()), reply->mutable_constraints_by_type());
+    constraint_stats(constraints.value("by_path", nlohmann::json::object()), reply->mutable_constraints_by_path());
     for (const auto& [name, png] : report->plots) {
       v1::Plot* plot = reply->add_plots();
       plot->set_name(name);

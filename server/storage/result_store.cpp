@@ -92,6 +92,7 @@ RegistrationPath parse_path(const std::optional<std::string>& text) {
 ConstraintType parse_constraint_type(std::string_view text) {
   if (text == "odometry") return ConstraintType::kOdometry;
   if (text == "adjacent") return ConstraintType::kAdjacent;
+  if (text == "loop") return ConstraintType::kLoop;
   throw std::runtime_error("constraint type '" + std::string(text) + "' is not known to this version of the core");
 }
 

@@ -1,6 +1,6 @@
 #include "server/storage/stored_bundle.h"
 
-#include <unistd.h>
+#include "server/scratch_dir.h"
 
 #include <array>
 #include <fstream>
@@ -11,27 +11,6 @@ namespace {
 
 constexpr std::array<std::string_view, 4> kBundleFiles = {kSurveyJsonFile, kNavFile, kPingsFile, kReferenceNavFile};
 
-// A fresh folder under `root`, removed with everything in it when this goes out of scope.
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::filesystem::path& root) {
-    std::filesystem::create_directories(root);
-    std::string pattern = (root / "bundle.XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("cannot make a scratch folder in " + root.string());
-    path_ = pattern;
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
 }  // namespace
 
 bool is_bundle_file(const std::string& name) {
@@ -41,7 +20,7 @@ bool is_bundle_file(const std::string& name) {
 }
 
 BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root) {
-  ScratchDir scratch(scratch_root);
+  server::ScratchDir scratch(scratch_root, "bundle");
   for (const UploadState& upload : store.uploads(survey_id)) {
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
     std::ofstream out(scratch.path() / upload.name, std::ios::binary);

@@ -39,6 +39,17 @@ assert abs(t["optimized"]["rmse"] - t["dead_reckoning"]["rmse"]) < 1e-6, t
 assert r["consistency_error_m"]["optimized"]["count"] > 1000, r["consistency_error_m"]
 PY
 test -s "$work/odo/trajectory.csv" && test -s "$work/odo/consistency_histogram.png"
+
+# The fused map and its tiles: a COG per tile that gdalinfo reads, a .vdb beside it, a quicklook.
+test -s "$work/odo/map.tif" && test -s "$work/odo/map.png"
+grep -qE "^map 0.50 m cells: map.tif, map.png, [0-9]+ tiles on [0-9]+ levels" "$work/odo.txt"
+tile=$(ls "$work"/odo/tiles/0/*.tif | head -n 1)
+test -s "${tile%.tif}.vdb"
+gdalinfo "$tile" > "$work/gdalinfo.txt"
+grep -q "LAYOUT=COG" "$work/gdalinfo.txt"
+grep -q "COMPRESSION=ZSTD" "$work/gdalinfo.txt"
+grep -q 'ID\["EPSG",32651\]' "$work/gdalinfo.txt"
+test ! -e "$work/odo/map_difference.png"  # odometry has no dead reckoning to compare with
 if "$BATHYSLAM" process "$work/s" --set gicp.max_iterations=-3 --out "$work/bad" 2> "$work/err.txt"; then
   echo "process accepted an out-of-range parameter" >&2
   exit 1

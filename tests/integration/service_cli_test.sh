@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The CLI against a real server and PostgreSQL: an upload cut in the middle and resumed, a gicp
-# job submitted, watched and reported, the job limit, tiles and map asked for, tokens.
+# job submitted, watched and reported, the job limit, tiles and the map downloaded, tokens.
 set -euo pipefail
 source "$(dirname "$0")/test_database.sh" service_cli
+fail() { echo "FAIL: $*" >&2; echo "--- server log" >&2; cat "$work/server.log" >&2; exit 1; }
 
 "$BATHYSLAM_SERVER_BIN" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant cli --max-active-jobs 1 \
   > "$work/server.out" 2> "$work/server.log" &
@@ -33,7 +34,7 @@ if "$BATHYSLAM" submit "$survey" --config odometry 2> "$work/limit.err"; then fa
 grep -q "RESOURCE_EXHAUSTED" "$work/limit.err" || fail "$(cat "$work/limit.err")"
 "$BATHYSLAM" watch "$job" > "$work/watch" 2> "$work/watch.err" || fail "watch: $(cat "$work/watch" "$work/watch.err")"
 grep -q "job $job succeeded" "$work/watch" || fail "$(cat "$work/watch")"
-for stage in load submaps register graph eval store; do
+for stage in load submaps register graph eval map store; do
   grep -q "  $stage " "$work/watch.err" || fail "no progress bar for $stage"
 done
 
@@ -45,10 +46,21 @@ done
 "$BATHYSLAM" report "$job" --json | python3 -c 'import json, sys; r = json.load(sys.stdin); assert r["configuration"] == "gicp"'
 "$BATHYSLAM" jobs | grep -Eq "^ +$job +$survey +gicp +succeeded" || fail "jobs: $("$BATHYSLAM" jobs)"
 
-# No tile generation yet: nothing to download, and no map.
-"$BATHYSLAM" tiles "$job" --out "$work/tiles" | grep -q "^0 geotiff tiles" || fail "tiles"
-if "$BATHYSLAM" map "$job" --out "$work/map.tif" 2> "$work/map.err"; then fail "a map without fusion"; fi
-grep -q "NOT_FOUND" "$work/map.err" || fail "$(cat "$work/map.err")"
+# The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG.
+"$BATHYSLAM" tiles "$job" --out "$work/tiles" > "$work/tiles.out" || fail "tiles"
+all=$(awk '{print $1}' "$work/tiles.out")
+[ "$all" -gt 1 ] || fail "$(cat "$work/tiles.out")"
+first=$(cd "$work/tiles" && ls 0/*.tif | head -n 1)
+gdalinfo "$work/tiles/$first" | grep -q "Band 3" || fail "GDAL cannot read $first"
+col_row=$(basename "$first" .tif)
+e=$(( ${col_row%_*} * 256 + 128 )) n=$(( ${col_row#*_} * 256 + 128 ))
+"$BATHYSLAM" tiles "$job" --out "$work/box" --bbox $e $n $((e + 1)) $((n + 1)) | grep -q "^[1-9][0-9]* geotiff tiles" ||
+  fail "no tile in the box"
+[ -f "$work/box/$first" ] || fail "the box did not fetch $first"
+[ "$(find "$work/box" -name '*.tif' | wc -l)" -lt "$all" ] || fail "the box fetched every tile"
+"$BATHYSLAM" map "$job" --out "$work/map.tif" > /dev/null || fail "map"
+gdalinfo "$work/map.tif" | grep -q "LAYOUT=COG" || fail "map.tif is not a COG"
+[ -f "$work/report/map_difference.png" ] || fail "no map difference plot"
 
 # Tokens: another tenant sees none of this; a wrong token is refused.
 token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)

@@ -35,12 +35,9 @@ def read(name):
         return f.read()
 
 
-def psql(url, sql, **variables):
-    """Runs SQL through psql's stdin with its values as psql variables (quoted by psql)."""
-    args = ["psql", "-qAt", "-v", "ON_ERROR_STOP=1", url]
-    for name, value in variables.items():
-        args += ["-v", f"{name}={value}"]
-    return subprocess.run(args, input=sql, text=True, capture_output=True, check=True).stdout.strip()
+def psql(url, sql):
+    return subprocess.run(["psql", "-qAt", "-v", "ON_ERROR_STOP=1", url], input=sql, text=True, capture_output=True,
+                          check=True).stdout.strip()
 
 
 class Server:
@@ -179,7 +176,7 @@ class ServiceApiTest(unittest.TestCase):
         events = self.watch(job.id)
         self.assertEqual(events[-1].state, job_pb2.SUCCEEDED, events[-1].message)
         stages = [e.stage for e in events]
-        for stage in ["load", "submaps", "graph", "eval", "store", "done"]:
+        for stage in ["load", "submaps", "graph", "eval", "map", "store", "done"]:
             self.assertIn(stage, stages)
         print(f"odometry job: {time.monotonic() - submitted:.1f} s from submit to succeeded", file=sys.stderr)
 
@@ -188,8 +185,12 @@ class ServiceApiTest(unittest.TestCase):
         self.assertGreater(report.consistency.count, 100)
         self.assertGreater(report.trajectory.rmse, 0)
         self.assertEqual(sum(report.histogram_counts), report.consistency.count)
+        by_type = {c.name: c for c in report.constraints_by_type}
+        self.assertEqual(list(by_type), ["odometry"])
+        self.assertEqual(by_type["odometry"].accepted, len(self.maps.GetTrajectory(
+            map_pb2.GetTrajectoryRequest(job_id=job.id), timeout=30).poses) - 1)
         self.assertEqual({p.name for p in report.plots},
-                         {"consistency_histogram.png", "trajectory_error.png", "trajectory.png"})
+                         {"consistency_histogram.png", "trajectory_error.png", "trajectory.png", "map.png"})
         for plot in report.plots:
             self.assertEqual(plot.png[:8], b"\x89PNG\r\n\x1a\n")
         trajectory = self.maps.GetTrajectory(map_pb2.GetTrajectoryRequest(job_id=job.id), timeout=30)
@@ -198,33 +199,56 @@ class ServiceApiTest(unittest.TestCase):
         listed = self.jobs.ListJobs(job_pb2.ListJobsRequest(survey_id=survey_id), timeout=30)
         self.assertEqual([j.id for j in listed.jobs], [job.id])
 
-        # Tiles are served from what the tiling stage stores; a GeoTIFF put there comes back
-        # byte for byte and GDAL reads it.
+        # The job's map: tiles on the fixed grid (GeoTIFF read back by GDAL, OpenVDB by
+        # pyopenvdb, PNG), and the whole map as one COG.
         from osgeo import gdal
+        import numpy
+        import pyopenvdb
         gdal.UseExceptions()
-        tiff = gdal.GetDriverByName("GTiff").Create("/vsimem/t.tif", 64, 64, 1, gdal.GDT_Float32)
-        tiff.SetGeoTransform([452000, 0.5, 0, 4630100, 0, -0.5])
-        tiff.GetRasterBand(1).Fill(-10.25)
-        tiff = None
-        data = bytes(gdal.VSIGetMemFileBuffer_unsafe("/vsimem/t.tif"))
-        psql(self.server.url, "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data)"
-             " VALUES (:job, 'geotiff', 0, 3, 1, decode(:'data', 'hex'))", job=job.id, data=data.hex())
         info = self.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30)
         self.assertEqual(info.epsg, 32651)
         self.assertIn("UTM zone 51N", info.crs_wkt)
-        self.assertEqual([(t.level, t.col, t.row) for t in info.tiles], [(0, 3, 1)])
-        chunks = list(self.maps.GetTile(map_pb2.GetTileRequest(job_id=job.id, level=0, col=3, row=1,
-                                                               format=map_pb2.GEOTIFF), timeout=30))
-        served = b"".join(c.data for c in chunks)
-        self.assertEqual(served, data)
-        gdal.FileFromMemBuffer("/vsimem/served.tif", served)
-        dataset = gdal.Open("/vsimem/served.tif")  # kept: a band does not keep its dataset alive
-        self.assertEqual(dataset.GetGeoTransform(), (452000, 0.5, 0, 4630100, 0, -0.5))
-        self.assertEqual(dataset.GetRasterBand(1).ReadAsArray()[5, 5], -10.25)
+        self.assertEqual((info.resolution_m, info.tile_size_cells), (0.5, 512))
+        self.assertGreaterEqual(info.levels, 1)
+        self.assertTrue(info.has_map)
+        self.assertLess(info.min_easting, info.max_easting)
+        tile = info.tiles[0]
+        self.assertEqual(set(tile.formats), {map_pb2.GEOTIFF, map_pb2.VDB, map_pb2.PNG})
+
+        def fetch(request):
+            chunks = list(request(timeout=60))
+            data = b"".join(c.data for c in chunks)
+            self.assertEqual(len(data), chunks[0].total_bytes)
+            return data
+
+        def get_tile(fmt):
+            return fetch(lambda **kw: self.maps.GetTile(map_pb2.GetTileRequest(
+                job_id=job.id, level=tile.level, col=tile.col, row=tile.row, format=fmt), **kw))
+
+        gdal.FileFromMemBuffer("/vsimem/tile.tif", get_tile(map_pb2.GEOTIFF))
+        dataset = gdal.Open("/vsimem/tile.tif")  # kept: a band does not keep its dataset alive
+        side = info.resolution_m * 2 ** tile.level * info.tile_size_cells
+        west, _, _, north, _, _ = dataset.GetGeoTransform()
+        self.assertAlmostEqual(west, tile.col * side)
+        self.assertAlmostEqual(north, (tile.row + 1) * side)
+        self.assertEqual(dataset.RasterCount, 3)
+        elevation = dataset.GetRasterBand(1).ReadAsArray()
+        self.assertTrue(-20 < numpy.nanmean(elevation) < -5, numpy.nanmean(elevation))
+        vdb = os.path.join(STUBS, "tile.vdb")
+        with open(vdb, "wb") as f:
+            f.write(get_tile(map_pb2.VDB))
+        grid = pyopenvdb.read(vdb, "elevation")  # (pyopenvdb reads no Int32 grid such as "count")
+        self.assertEqual(grid["crs"], "EPSG:32651")
+        self.assertGreater(grid.activeVoxelCount(), 0)
+        self.assertEqual(get_tile(map_pb2.PNG)[:8], b"\x89PNG\r\n\x1a\n")
+        gdal.FileFromMemBuffer("/vsimem/map.tif", fetch(lambda **kw: self.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id), **kw)))
+        whole = gdal.Open("/vsimem/map.tif")
+        self.assertEqual(whole.GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE"), "COG")
+        self.assertAlmostEqual(whole.GetGeoTransform()[0], info.min_easting)
         self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
-                         map_pb2.GetTileRequest(job_id=job.id, level=0, col=3, row=1, format=map_pb2.VDB))
-        self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetMap(r, **kw)),
-                         map_pb2.GetMapRequest(job_id=job.id))
+                         map_pb2.GetTileRequest(job_id=job.id, level=99, col=0, row=0, format=map_pb2.GEOTIFF))
+        self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
+                         map_pb2.GetTileRequest(job_id=job.id, level=0, col=0, row=0))
 
         # Deleting the survey deletes its jobs and results.
         self.surveys.DeleteSurvey(survey_pb2.DeleteSurveyRequest(survey_id=survey_id), timeout=30)
@@ -277,7 +301,7 @@ class ServiceApiTest(unittest.TestCase):
         self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.ListSurveys,
                          survey_pb2.ListSurveysRequest(page_token="nonsense"))
         survey_id = self.create("bad jobs")
-        for configuration, parameters, field in [("mchs", {}, "configuration"), ("", {}, "configuration"),
+        for configuration, parameters, field in [("slam", {}, "configuration"), ("", {}, "configuration"),
                                                  ("gicp", {"gicp.max_iterations": "0"}, "parameters[gicp.max_iterations]"),
                                                  ("gicp", {"no.such": "1"}, "parameters[no.such]")]:
             details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.jobs.SubmitJob,

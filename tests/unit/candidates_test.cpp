@@ -78,7 +78,9 @@ TEST(Candidates, FindEveryTrulyOverlappingAdjacentLinePairAndNoOther) {
         ++truly_overlapping;
         EXPECT_TRUE(is_candidate) << a.index << "-" << b.index << " share " << fraction << " of their cells";
       }
-      if (is_candidate) EXPECT_GT(fraction, 0.02) << a.index << "-" << b.index << " share nothing";
+      if (is_candidate) {
+        EXPECT_GT(fraction, 0.02) << a.index << "-" << b.index << " share nothing";
+      }
     }
   }
   EXPECT_GT(truly_overlapping, 10);

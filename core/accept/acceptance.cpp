@@ -1,0 +1,72 @@
+#include "core/accept/acceptance.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <utility>
+
+namespace bathyslam {
+namespace {
+
+// Linear between knots (x ascending), constant beyond the ends.
+template <std::size_t N>
+double piecewise(const std::array<std::pair<double, double>, N>& knots, double x) {
+  if (x <= knots.front().first) return knots.front().second;
+  for (std::size_t k = 1; k < N; ++k) {
+    if (x <= knots[k].first) {
+      const auto [x0, y0] = knots[k - 1];
+      const auto [x1, y1] = knots[k];
+      return y0 + (y1 - y0) * (x - x0) / (x1 - x0);
+    }
+  }
+  return knots.back().second;
+}
+
+std::string format(const char* pattern, double a, double b) {
+  char text[128];
+  std::snprintf(text, sizeof text, pattern, a, b);
+  return text;
+}
+
+}  // namespace
+
+std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
+                             bool loop_closure) {
+  const RegistrationQuality& q = r.registration.quality;
+  if (loop_closure && r.path == RegistrationPath::kDirect) return "loop closure without features (" + r.why + ")";
+  if (!q.converged) return "GICP did not converge";
+  if (r.inlier_ratio < config.min_inlier_ratio) return format("inlier ratio %.2f < %.2f", r.inlier_ratio, config.min_inlier_ratio);
+  if (q.overlap_mse_m2 > config.max_overlap_mse_m2) return format("overlap MSE %.2f m2 > %.2f m2", q.overlap_mse_m2, config.max_overlap_mse_m2);
+  if (static_cast<int>(q.overlap_points) < config.min_overlap_points) {
+    return format("overlap points %.0f < %.0f", static_cast<double>(q.overlap_points), config.min_overlap_points);
+  }
+  const double moved = (r.registration.source_to_target.translation() - guess.translation()).norm();
+  if (moved > config.max_translation_m) return format("translation from dead reckoning %.1f m > %.1f m", moved, config.max_translation_m);
+  return {};
+}
+
+double inlier_ratio_weight(double inlier_ratio) {
+  return piecewise<3>({{{0.25, 0.2}, {0.5, 0.6}, {0.8, 1.0}}}, inlier_ratio);
+}
+
+double overlap_mse_weight(double mse_m2) {
+  return piecewise<4>({{{0.05, 1.0}, {0.2, 0.7}, {1.0, 0.3}, {5.0, 0.05}}}, mse_m2);
+}
+
+double overlap_points_weight(double points) {
+  return piecewise<3>({{{500, 0.2}, {2000, 0.6}, {10000, 1.0}}}, points);
+}
+
+Information6 quality_information(const PairRegistration& r, double switch_density, const QualityConfig& config) {
+  const RegistrationQuality& q = r.registration.quality;
+  const double weight = inlier_ratio_weight(r.inlier_ratio) * overlap_mse_weight(q.overlap_mse_m2) *
+                        overlap_points_weight(static_cast<double>(q.overlap_points));
+  Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
+  if (r.path == RegistrationPath::kDirect && switch_density > 0) {
+    const double observability = std::clamp(r.feature_density / switch_density, 0.01, 1.0);
+    for (int k : {0, 1, 5}) information(k, k) *= observability;
+  }
+  return information;
+}
+
+}  // namespace bathyslam

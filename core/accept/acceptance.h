@@ -1,0 +1,42 @@
+#pragma once
+// accept: whether a registration becomes a graph edge (Table 1 (b)), and the quality-aware
+// information matrix it enters the graph with (section 4).
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "core/graph/pose_graph.h"
+#include "core/register/coarse_to_fine.h"
+
+namespace bathyslam {
+
+struct AcceptanceConfig {  // Table 1 (b)
+  double min_inlier_ratio = 0.25;
+  double max_overlap_mse_m2 = 5.0;
+  int min_overlap_points = 500;
+  double max_translation_m = 100.0;  // how far the registration may move the source from DR
+};
+
+// Empty when accepted; otherwise the first failed test in words. A loop closure spans the
+// drift of a line or more, wider than GICP's basin from dead reckoning: only the feature-aided
+// path may close one (section 3.4, coarse to fine).
+std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
+                             bool loop_closure);
+
+struct QualityConfig {
+  // Information of a perfect registration, compared at the overlap (the edge's anchor).
+  Eigen::Vector3d best_sigma_translation_m{0.1, 0.1, 0.05};
+  Eigen::Vector3d best_sigma_rotation_rad{0.002, 0.002, 0.004};
+};
+
+// Each factor in (0, 1], piecewise linear between the knots given in the README ("MCHS").
+double inlier_ratio_weight(double inlier_ratio);
+double overlap_mse_weight(double mse_m2);
+double overlap_points_weight(double points);
+
+// Information = that of a perfect registration scaled by the three weights' product; on the
+// direct path the horizontal and yaw entries are further scaled by the pair's feature density
+// over the switch threshold (at most 1), since a flat overlap leaves them unobserved.
+Information6 quality_information(const PairRegistration& r, double switch_density, const QualityConfig& config);
+
+}  // namespace bathyslam

@@ -1,0 +1,43 @@
+#pragma once
+// features (Algorithm 1): terrain standard deviation (TSD) keypoints of a gridded submap and
+// their rotation-normalised elevation descriptors.
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "core/features/terrain_grid.h"
+
+namespace bathyslam {
+
+struct KeypointConfig {  // Table 1 (b)
+  std::vector<int> window_scales{3, 7, 9};  // TSD windows, cells
+  double percentile = 70;                   // keypoints pass this percentile at every scale
+  int descriptor_size = 11;                 // d x d elevation samples
+  // A departure from the paper: a per-submap percentile alone selects 30 % of the cells, flat
+  // or not, so keypoints must also stand above the sounding noise of a flat bottom (README,
+  // "MCHS"); without it the feature density could never fall below the switch threshold.
+  double min_tsd_m = 0.08;     // at the finest scale
+  int suppression_radius = 0;  // cells; 0 (the paper): every cell that passes is a keypoint
+  int orientation_bins = 36;
+};
+
+struct Keypoint {
+  Eigen::Vector3d position;  // submap frame (x, y, z down), z from the grid
+  double tsd_m = 0;          // at the finest scale
+  double orientation_rad = 0;  // dominant gradient direction, grid frame
+  Eigen::VectorXf descriptor;  // d*d elevations, rotated to the orientation, minus their mean
+};
+
+// TSD of `grid` over square windows of `window` cells (valid cells only), computed with box
+// filters; 0 where the window holds fewer than half its cells.
+cv::Mat terrain_standard_deviation(const TerrainGrid& grid, int window);
+
+std::vector<Keypoint> detect_keypoints(const TerrainGrid& grid, const KeypointConfig& config = {});
+
+// Normalised cross-correlation of two descriptors (equation 10), in [-1, 1].
+double descriptor_ncc(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
+// Mean squared difference of two descriptors, m^2: the match score of Algorithm 2.
+double descriptor_mse(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
+
+}  // namespace bathyslam

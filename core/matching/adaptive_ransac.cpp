@@ -1,0 +1,93 @@
+#include "core/matching/adaptive_ransac.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+namespace bathyslam {
+namespace {
+
+// Least-squares rigid transform (Kabsch/Umeyama without scale) taking `from` onto `to`.
+Eigen::Isometry3d rigid_fit(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                            const std::vector<int>& use) {
+  Eigen::Matrix3Xd from(3, use.size()), to(3, use.size());
+  for (std::size_t k = 0; k < use.size(); ++k) {
+    from.col(static_cast<Eigen::Index>(k)) = source[use[k]];
+    to.col(static_cast<Eigen::Index>(k)) = target[use[k]];
+  }
+  Eigen::Isometry3d t;
+  t.matrix() = Eigen::umeyama(from, to, false);
+  return t;
+}
+
+// Three points nearly on a line leave the rotation about that line free.
+bool degenerate(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& sample) {
+  const Eigen::Vector3d a = points[sample[1]] - points[sample[0]], b = points[sample[2]] - points[sample[0]];
+  return a.cross(b).norm() < 0.5;  // twice the triangle's area, m^2
+}
+
+double median(std::vector<double> v) {
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  return v[mid];
+}
+
+}  // namespace
+
+RansacResult adaptive_ransac(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                             const RansacConfig& config) {
+  RansacResult best;
+  const int n = static_cast<int>(source.size());
+  if (n < config.sample_size) return best;
+  std::mt19937_64 rng(config.seed);
+  double threshold = config.initial_threshold_m;
+  const auto target_inliers = static_cast<std::size_t>(std::ceil(config.target_inlier_ratio * n));
+  std::vector<int> sample, inliers;
+  std::vector<double> errors(n);
+
+  for (int iteration = 0; iteration < config.max_iterations && best.inliers.size() < target_inliers; ++iteration) {
+    best.iterations = iteration + 1;
+    // PROSAC: draw from the best-ranked matches first and widen the pool as iterations pass.
+    const int pool = std::min(n, std::max(config.sample_size, iteration / 10 + config.sample_size));
+    sample.clear();
+    while (static_cast<int>(sample.size()) < config.sample_size) {
+      const int k = std::uniform_int_distribution<int>(0, pool - 1)(rng);
+      if (std::find(sample.begin(), sample.end(), k) == sample.end()) sample.push_back(k);
+    }
+    if (config.sample_size == 3 && (degenerate(source, sample) || degenerate(target, sample))) continue;
+    const Eigen::Isometry3d candidate = rigid_fit(source, target, sample);
+
+    inliers.clear();
+    for (int i = 0; i < n; ++i) {
+      errors[i] = (candidate * source[i] - target[i]).norm();
+      if (errors[i] < threshold) inliers.push_back(i);
+    }
+    if (inliers.size() <= best.inliers.size()) continue;
+    best.source_to_target = candidate;
+    best.inliers = inliers;
+    if (static_cast<int>(inliers.size()) >= config.min_inliers) {
+      // MAD of the inlier errors: the threshold follows the noise the data actually has.
+      std::vector<double> inlier_errors;
+      for (int i : inliers) inlier_errors.push_back(errors[i]);
+      const double med = median(inlier_errors);
+      for (double& e : inlier_errors) e = std::abs(e - med);
+      const double mad = median(inlier_errors);
+      threshold = std::clamp(med + config.mad_scale * 1.4826 * mad, config.min_threshold_m, config.initial_threshold_m);
+    }
+  }
+
+  if (static_cast<int>(best.inliers.size()) >= config.min_inliers) {
+    best.source_to_target = rigid_fit(source, target, best.inliers);
+    best.inliers.clear();
+    for (int i = 0; i < n; ++i) {
+      if ((best.source_to_target * source[i] - target[i]).norm() < threshold) best.inliers.push_back(i);
+    }
+  }
+  best.threshold_m = threshold;
+  best.inlier_ratio = static_cast<double>(best.inliers.size()) / n;
+  return best;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,91 @@
+#include "core/register/coarse_to_fine.h"
+
+#include <cstdio>
+
+namespace bathyslam {
+namespace {
+
+std::string format(const char* pattern, double a, double b) {
+  char text[128];
+  std::snprintf(text, sizeof text, pattern, a, b);
+  return text;
+}
+
+Eigen::Vector3d centroid_of(const Cloud& cloud) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const pcl::PointXYZ& p : cloud) sum += p.getVector3fMap().cast<double>();
+  return cloud.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(cloud.size()));
+}
+
+}  // namespace
+
+SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints) {
+  const TerrainGrid terrain = grid_terrain(submap.points, grid);
+  return {detect_keypoints(terrain, keypoints), terrain.valid_cells()};
+}
+
+double feature_density(const SubmapFeatures& a, const SubmapFeatures& b) {
+  const int cells = a.valid_cells + b.valid_cells;
+  return cells > 0 ? static_cast<double>(a.keypoints.size() + b.keypoints.size()) / cells : 0.0;
+}
+
+std::string to_string(RegistrationPath path) {
+  return path == RegistrationPath::kDirect ? "direct" : "feature-aided";
+}
+
+PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
+                                 const GicpConfig& gicp, double crop_margin_m) {
+  const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);
+  const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);
+  PairRegistration r;
+  r.coarse = guess;
+  r.anchor = centroid_of(*source_overlap);
+  r.registration = register_gicp(target_overlap, source_overlap, guess, gicp);
+  r.inlier_ratio = r.registration.quality.fitness;
+  return r;
+}
+
+PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
+                                         const CoarseToFineConfig& config, uint64_t seed) {
+  const double density = feature_density(target_features, source_features);
+  auto direct = [&](std::string why) {
+    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m);
+    r.path = RegistrationPath::kDirect;
+    r.why = std::move(why);
+    r.feature_density = density;
+    return r;
+  };
+  if (density < config.switching.min_feature_density) {
+    return direct(format("feature density %.4f < %.4f", density, config.switching.min_feature_density));
+  }
+  const std::vector<FeatureMatch> matches =
+      match_features(source_features.keypoints, target_features.keypoints, guess, config.matching);
+  if (static_cast<int>(matches.size()) < config.matching.min_matches) {
+    PairRegistration r = direct(format("too few matches %.0f < %.0f", static_cast<double>(matches.size()),
+                                       static_cast<double>(config.matching.min_matches)));
+    r.matches = static_cast<int>(matches.size());
+    return r;
+  }
+  std::vector<Eigen::Vector3d> from, to;
+  for (const FeatureMatch& m : matches) {
+    from.push_back(source_features.keypoints[m.source].position);
+    to.push_back(target_features.keypoints[m.target].position);
+  }
+  RansacConfig ransac = config.ransac;
+  ransac.seed = seed;
+  const RansacResult coarse = adaptive_ransac(from, to, ransac);
+
+  // GICP refines the feature estimate on the overlap that estimate predicts.
+  PairRegistration r = register_direct(target, source, coarse.source_to_target, config.gicp, config.crop_margin_m);
+  r.path = RegistrationPath::kFeatureAided;
+  r.why = format("feature density %.4f >= %.4f", density, config.switching.min_feature_density) + ", " +
+          std::to_string(matches.size()) + " matches";
+  r.feature_density = density;
+  r.matches = static_cast<int>(matches.size());
+  r.ransac_inliers = static_cast<int>(coarse.inliers.size());
+  r.inlier_ratio = coarse.inlier_ratio;
+  return r;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,64 @@
+#pragma once
+// register (MCHS): the observability switch between direct GICP and feature-aided registration
+// (TSD keypoints -> matching -> adaptive RANSAC -> GICP refinement), per submap pair.
+#include <string>
+#include <vector>
+
+#include "core/features/terrain_grid.h"
+#include "core/features/tsd_keypoints.h"
+#include "core/matching/adaptive_ransac.h"
+#include "core/matching/feature_matching.h"
+#include "core/register/gicp.h"
+#include "core/submaps/submap.h"
+
+namespace bathyslam {
+
+struct SubmapFeatures {
+  std::vector<Keypoint> keypoints;
+  int valid_cells = 0;
+};
+
+SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints);
+
+struct SwitchConfig {
+  double min_feature_density = 0.005;  // Table 1 (a): keypoints per valid cell of the pair
+};
+
+// Keypoints over valid cells of the two submaps together.
+double feature_density(const SubmapFeatures& a, const SubmapFeatures& b);
+
+enum class RegistrationPath { kDirect, kFeatureAided };
+std::string to_string(RegistrationPath path);
+
+struct CoarseToFineConfig {
+  SwitchConfig switching;
+  MatchConfig matching;
+  RansacConfig ransac;
+  GicpConfig gicp;
+  double crop_margin_m = 1.0;
+};
+
+struct PairRegistration {
+  RegistrationPath path = RegistrationPath::kDirect;
+  std::string why;  // the switch's decision in words
+  double feature_density = 0;
+  int matches = 0;
+  int ransac_inliers = 0;
+  // RANSAC's inlier share on the feature-aided path; GICP's fitness (share of source points
+  // with a target point within the gate) on the direct path.
+  double inlier_ratio = 0;
+  Eigen::Isometry3d coarse = Eigen::Isometry3d::Identity();  // where GICP started
+  Registration registration;
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // centroid of the source overlap, source frame
+};
+
+// `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC reproducible per pair.
+PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
+                                         const CoarseToFineConfig& config, uint64_t seed);
+
+// Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid.
+PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
+                                 const GicpConfig& gicp, double crop_margin_m);
+
+}  // namespace bathyslam

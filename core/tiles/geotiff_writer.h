@@ -1,0 +1,17 @@
+#pragma once
+// GeoTIFF export through GDAL's COG driver (cloud-optimised GeoTIFF): Float32 bands elevation,
+// uncertainty and count, NaN NoData, the survey's CRS, a geotransform on the cell edges, internal
+// 512 × 512 tiles, ZSTD with the floating-point predictor, and averaged overviews when the raster
+// is larger than one tile.
+#include <filesystem>
+#include <string_view>
+
+#include "core/fuse/grid.h"
+
+namespace bathyslam {
+
+// Writes `raster` (cells in `crs`, an "EPSG:<code>") to `path`; throws std::runtime_error naming
+// the path when GDAL cannot.
+void write_geotiff(const GridRaster& raster, std::string_view crs, const std::filesystem::path& path);
+
+}  // namespace bathyslam

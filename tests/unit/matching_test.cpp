@@ -1,0 +1,122 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/accept/acceptance.h"
+#include "core/matching/adaptive_ransac.h"
+#include "core/register/coarse_to_fine.h"
+#include "tests/unit/synthetic_terrain.h"
+
+namespace bathyslam {
+namespace {
+
+Eigen::Isometry3d pose(double x, double y, double yaw_deg) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.translation() = Eigen::Vector3d(x, y, 0);
+  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return p;
+}
+
+double angle_deg(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.rotation()).angle() * 180 / M_PI; }
+
+TEST(AdaptiveRansac, RecoversAKnownTransformFromMatchesThatAre60PercentOutliers) {
+  const Eigen::Isometry3d truth = pose(3.2, -7.5, 12.0);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> where(-25, 25), depth(8, 12);
+  std::normal_distribution<double> noise(0, 0.05);
+  std::vector<Eigen::Vector3d> source, target;
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::Vector3d s(where(rng), where(rng), depth(rng));
+    source.push_back(s);
+    // Every 5 matches: 2 inliers, 3 outliers, so good and bad are mixed through the order.
+    if (i % 5 < 2) {
+      target.push_back(truth * s + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    } else {
+      target.emplace_back(where(rng), where(rng), depth(rng));
+    }
+  }
+  const RansacResult r = adaptive_ransac(source, target);
+  const Eigen::Isometry3d error = truth.inverse() * r.source_to_target;
+  EXPECT_LT(error.translation().norm(), 0.1);
+  EXPECT_LT(angle_deg(error), 0.5);
+  EXPECT_NEAR(r.inlier_ratio, 0.4, 0.03);
+  EXPECT_LT(r.threshold_m, 1.0) << "the threshold adapted to the inliers' noise";
+  const RansacResult again = adaptive_ransac(source, target);
+  EXPECT_TRUE(again.source_to_target.isApprox(r.source_to_target)) << "deterministic for a seed";
+}
+
+struct PairClouds {
+  Cloud::Ptr target, source;
+  SubmapFeatures target_features, source_features;
+};
+
+// Two submaps of `terrain`: the target frame at the world origin, the source at `source_pose`.
+PairClouds pair_of(const SyntheticTerrain& target_terrain, const SyntheticTerrain& source_terrain,
+                   const Eigen::Isometry3d& source_pose) {
+  Submap a, b;
+  a.points = target_terrain.sample(Eigen::Isometry3d::Identity(), 0.03, 5);
+  b.points = source_terrain.sample(source_pose, 0.03, 6);
+  return {voxel_filter(a.points), voxel_filter(b.points), extract_features(a, {}, {}), extract_features(b, {}, {})};
+}
+
+TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
+  const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
+  const Eigen::Isometry3d guess = pose(7.5, 2.8, 10.0) * Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0));
+  const CoarseToFineConfig config;
+
+  const SyntheticTerrain flat = SyntheticTerrain::flat();
+  const PairClouds f = pair_of(flat, flat, truth);
+  const PairRegistration direct = register_coarse_to_fine(*f.target, *f.source, f.target_features, f.source_features,
+                                                          guess, config, 1);
+  EXPECT_EQ(direct.path, RegistrationPath::kDirect) << direct.why;
+  EXPECT_LT(direct.feature_density, config.switching.min_feature_density);
+
+  const SyntheticTerrain rough = SyntheticTerrain::with_mounds(21);
+  const PairClouds r = pair_of(rough, rough, truth);
+  const PairRegistration aided = register_coarse_to_fine(*r.target, *r.source, r.target_features, r.source_features,
+                                                         guess, config, 1);
+  ASSERT_EQ(aided.path, RegistrationPath::kFeatureAided) << aided.why;
+  EXPECT_GE(aided.matches, config.matching.min_matches);
+  const Eigen::Isometry3d error = truth.inverse() * aided.registration.source_to_target;
+  EXPECT_LT(error.translation().norm(), 0.1);
+  EXPECT_LT(angle_deg(error), 0.3);
+  EXPECT_EQ(rejection_reason(aided, guess, {}, true), "") << "a good loop closure is accepted";
+}
+
+TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
+  // Same kind of ground, different mounds: dead reckoning claims they overlap.
+  const SyntheticTerrain here = SyntheticTerrain::with_mounds(31), there = SyntheticTerrain::with_mounds(32);
+  const Eigen::Isometry3d claimed = pose(6.0, 4.0, 8.0);
+  const PairClouds p = pair_of(here, there, claimed);
+  const CoarseToFineConfig config;
+  const PairRegistration r = register_coarse_to_fine(*p.target, *p.source, p.target_features, p.source_features,
+                                                     claimed, config, 1);
+  EXPECT_NE(rejection_reason(r, claimed, {}, true), "") << "accepted: " << r.why << ", inliers " << r.inlier_ratio;
+}
+
+TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
+  for (double x = 0.0; x < 1.0; x += 0.01) {
+    EXPECT_LE(inlier_ratio_weight(x), inlier_ratio_weight(x + 0.01));
+    EXPECT_GT(inlier_ratio_weight(x), 0.0);
+  }
+  for (double mse = 0.0; mse < 6.0; mse += 0.01) EXPECT_GE(overlap_mse_weight(mse), overlap_mse_weight(mse + 0.01));
+  for (double n = 0; n < 20000; n += 50) EXPECT_LE(overlap_points_weight(n), overlap_points_weight(n + 50));
+  EXPECT_LT(inlier_ratio_weight(0.25), inlier_ratio_weight(0.9)) << "and they do change";
+  EXPECT_GT(overlap_mse_weight(0.05), overlap_mse_weight(4.0));
+  EXPECT_LT(overlap_points_weight(500), overlap_points_weight(20000));
+
+  // The information matrix follows: every diagonal entry grows with quality.
+  PairRegistration worse, better;
+  worse.path = better.path = RegistrationPath::kFeatureAided;
+  worse.inlier_ratio = 0.3;
+  better.inlier_ratio = 0.7;
+  worse.registration.quality.overlap_mse_m2 = 1.0;
+  better.registration.quality.overlap_mse_m2 = 0.1;
+  worse.registration.quality.overlap_points = 800;
+  better.registration.quality.overlap_points = 6000;
+  const Information6 a = quality_information(worse, 0.005, {}), b = quality_information(better, 0.005, {});
+  for (int k = 0; k < 6; ++k) EXPECT_LT(a(k, k), b(k, k));
+}
+
+}  // namespace
+}  // namespace bathyslam
