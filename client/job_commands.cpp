@@ -117,7 +117,7 @@ void print_constraints(const char* heading, const google::protobuf::RepeatedPtrF
   std::printf("\n%-14s %10s %9s %9s  %s\n", heading, "candidates", "accepted", "rejected", "rejection reasons");
   for (const v1::ConstraintStats& c : groups) {
     std::string reasons;
-    for (const auto& [reason, n] : c.rejection_reasons()) reasons += reason + " (" + std::to_string(n) + ") ";
+    for (const auto& [reason, n] : c.rejection_reasons()) reasons += (reasons.empty() ? "" : "; ") + std::to_string(n) + " × " + reason;
     std::printf("%-14s %10lld %9lld %9lld  %s\n", c.name().c_str(), static_cast<long long>(c.candidates()),
                 static_cast<long long>(c.accepted()), static_cast<long long>(c.rejected()), reasons.c_str());
   }
