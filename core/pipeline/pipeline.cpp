@@ -202,7 +202,10 @@ void register_incrementally(PipelineResult& r, const std::vector<Cloud::Ptr>& cl
                             const std::vector<SubmapFeatures>& features, const PipelineConfig& config,
                             const ProgressFn& progress, const std::atomic<bool>* cancel) {
   const int n = static_cast<int>(r.dr_poses.size());
-  const int batch = config.batch_submaps > 0 ? config.batch_submaps : std::max(n, 1);
+  // The `gicp` baseline registers from dead reckoning, as the paper's does; fed back through
+  // its uniform weights, its wrong flat-ground edges would steer every later guess.
+  const bool incremental = config.configuration == Configuration::kMchs && config.batch_submaps > 0;
+  const int batch = incremental ? config.batch_submaps : std::max(n, 1);
   std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
