@@ -129,8 +129,8 @@ Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, cons
   Constraint c = constraint_of(typed, reg, guess);
   c.information = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
   c.accepted = c.quality.converged && c.quality.overlap_points > 0;
-  if (!c.quality.converged) c.reason = "GICP did not converge";
-  else if (c.quality.overlap_points == 0) c.reason = "no overlapping points";
+  if (c.quality.overlap_points == 0) c.reason = "no overlapping points";
+  else if (!c.quality.converged) c.reason = "GICP did not converge";
   return c;
 }
 
