@@ -34,6 +34,7 @@ std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d&
                              bool loop_closure) {
   const RegistrationQuality& q = r.registration.quality;
   if (loop_closure && r.path == RegistrationPath::kDirect) return "loop closure without features (" + r.why + ")";
+  if (q.overlap_points == 0) return "no overlapping points";
   if (!q.converged) return "GICP did not converge";
   if (r.inlier_ratio < config.min_inlier_ratio) return format("inlier ratio %.2f < %.2f", r.inlier_ratio, config.min_inlier_ratio);
   if (q.overlap_mse_m2 > config.max_overlap_mse_m2) return format("overlap MSE %.2f m2 > %.2f m2", q.overlap_mse_m2, config.max_overlap_mse_m2);

@@ -73,6 +73,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("quality.sigma_yaw_rad", c.quality.best_sigma_rotation_rad.z(), 1e-6, 10);
   visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
   visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
+  visit("batch_submaps", c.batch_submaps, 0, 1000000);
   visit("threads", c.threads, 0, 1024);
 }
 
@@ -120,25 +121,26 @@ Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, co
 
 // `gicp`: direct GICP from dead reckoning, every converged registration kept with the same
 // information, as in the paper's baseline.
-Constraint register_uniform(const PipelineResult& r, const TypedPair& typed, const std::vector<Cloud::Ptr>& clouds,
-                            const PipelineConfig& config) {
+Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, const TypedPair& typed,
+                            const std::vector<Cloud::Ptr>& clouds, const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
-  const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
+  const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const PairRegistration reg = register_direct(*clouds[pair.target], *clouds[pair.source], guess, config.gicp, 1.0);
   Constraint c = constraint_of(typed, reg, guess);
   c.information = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
   c.accepted = c.quality.converged && c.quality.overlap_points > 0;
-  if (!c.quality.converged) c.reason = "GICP did not converge";
-  else if (c.quality.overlap_points == 0) c.reason = "no overlapping points";
+  if (c.quality.overlap_points == 0) c.reason = "no overlapping points";
+  else if (!c.quality.converged) c.reason = "GICP did not converge";
   return c;
 }
 
 // `mchs`: the switch picks direct or feature-aided registration; acceptance decides whether the
 // result becomes an edge, and its quality how much the edge weighs.
-Constraint register_mchs(const PipelineResult& r, const TypedPair& typed, const std::vector<Cloud::Ptr>& clouds,
-                         const std::vector<SubmapFeatures>& features, const PipelineConfig& config) {
+Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const TypedPair& typed,
+                         const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
+                         const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
-  const Eigen::Isometry3d guess = r.dr_poses[pair.target].inverse() * r.dr_poses[pair.source];
+  const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const CoarseToFineConfig c2f{config.switching, config.matching, config.ransac, config.gicp, 1.0};
   const uint64_t seed = config.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
   const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
@@ -150,28 +152,71 @@ Constraint register_mchs(const PipelineResult& r, const TypedPair& typed, const 
   return c;
 }
 
-// Registers every candidate pair in parallel; results land in pair order.
-std::vector<Constraint> register_pairs(const PipelineResult& r, const std::vector<TypedPair>& pairs,
+// Registers every pair in parallel from the guesses `estimate` gives; results in pair order.
+std::vector<Constraint> register_pairs(const std::vector<Eigen::Isometry3d>& estimate, const std::vector<TypedPair>& pairs,
                                        const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
-                                       const PipelineConfig& config, const ProgressFn& progress,
-                                       const std::atomic<bool>* cancel) {
+                                       const PipelineConfig& config, const std::atomic<bool>* cancel) {
   std::vector<Constraint> constraints(pairs.size());
   const int threads = config.threads > 0 ? config.threads : static_cast<int>(std::thread::hardware_concurrency());
-  std::mutex progress_mutex;
-  std::size_t finished = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (cancel != nullptr && cancel->load()) continue;
     constraints[k] = config.configuration == Configuration::kMchs
-                         ? register_mchs(r, pairs[k], clouds, features, config)
-                         : register_uniform(r, pairs[k], clouds, config);
-    if (progress) {
-      std::lock_guard lock(progress_mutex);
-      progress("register", static_cast<double>(++finished) / pairs.size());
-    }
+                         ? register_mchs(estimate, pairs[k], clouds, features, config)
+                         : register_uniform(estimate, pairs[k], clouds, config);
   }
   check(cancel);
   return constraints;
+}
+
+std::vector<PoseGraphEdge> edges_of(const std::vector<Constraint>& constraints) {
+  std::vector<PoseGraphEdge> edges;
+  for (const Constraint& c : constraints) {
+    if (c.accepted) edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor});
+  }
+  return edges;
+}
+
+// The candidates whose later submap lies in [begin, end), with footprints at `estimate`.
+std::vector<TypedPair> candidates_ending_in(const PipelineResult& r, const std::vector<Eigen::Isometry3d>& estimate,
+                                            int begin, int end, const PipelineConfig& config) {
+  std::vector<TypedPair> pairs;
+  auto take = [&](const std::vector<CandidatePair>& found, ConstraintType type) {
+    for (const CandidatePair& p : found) {
+      if (p.source >= begin && p.source < end) pairs.push_back({p, type});
+    }
+  };
+  take(adjacent_line_candidates(r.submaps, estimate, config.candidates), ConstraintType::kAdjacent);
+  if (config.configuration == Configuration::kMchs) {
+    take(loop_candidates(r.submaps, estimate, config.candidates), ConstraintType::kLoop);
+  }
+  return pairs;
+}
+
+// Registration in survey order, a batch of submaps at a time, as a vehicle would map: each
+// batch is predicted by dead reckoning from the trajectory corrected so far, its candidates are
+// registered from that prediction, and the graph is solved before the next batch. A pair's
+// guess then carries the drift of one batch rather than of everything between its two
+// submaps, which across a lawnmower is tens of metres, far outside GICP's basin.
+void register_incrementally(PipelineResult& r, const std::vector<Cloud::Ptr>& clouds,
+                            const std::vector<SubmapFeatures>& features, const PipelineConfig& config,
+                            const ProgressFn& progress, const std::atomic<bool>* cancel) {
+  const int n = static_cast<int>(r.dr_poses.size());
+  // The `gicp` baseline registers from dead reckoning, as the paper's does; fed back through
+  // its uniform weights, its wrong flat-ground edges would steer every later guess.
+  const bool incremental = config.configuration == Configuration::kMchs && config.batch_submaps > 0;
+  const int batch = incremental ? config.batch_submaps : std::max(n, 1);
+  std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
+  for (int begin = 0; begin < n; begin += batch) {
+    const int end = std::min(n, begin + batch);
+    for (int s = std::max(begin, 1); s < end; ++s) {
+      estimate[s] = estimate[s - 1] * (r.dr_poses[s - 1].inverse() * r.dr_poses[s]);
+    }
+    const std::vector<TypedPair> pairs = candidates_ending_in(r, estimate, begin, end, config);
+    for (Constraint& c : register_pairs(estimate, pairs, clouds, features, config, cancel)) r.constraints.push_back(c);
+    if (end < n && !pairs.empty()) estimate = optimize_pose_graph(estimate, edges_of(r.constraints), config.graph).poses;
+    if (progress) progress("register", static_cast<double>(end) / n);
+  }
 }
 
 }  // namespace
@@ -283,31 +328,13 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
       check(cancel);
     }
 
-    report("candidates", 0);
-    std::vector<TypedPair> pairs;
-    for (const CandidatePair& p : adjacent_line_candidates(r.submaps, r.dr_poses, config.candidates)) {
-      pairs.push_back({p, ConstraintType::kAdjacent});
-    }
-    if (config.configuration == Configuration::kMchs) {
-      for (const CandidatePair& p : loop_candidates(r.submaps, r.dr_poses, config.candidates)) {
-        pairs.push_back({p, ConstraintType::kLoop});
-      }
-    }
-    clock.done("candidates");
-
     report("register", 0);
-    for (Constraint& c : register_pairs(r, pairs, clouds, features, config, progress, cancel)) r.constraints.push_back(c);
+    register_incrementally(r, clouds, features, config, progress, cancel);
     clock.done("register");
   }
 
   report("graph", 0);
-  std::vector<PoseGraphEdge> edges;
-  for (const Constraint& c : r.constraints) {
-    if (c.accepted) {
-      edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor});
-    }
-  }
-  r.graph = optimize_pose_graph(r.dr_poses, edges, config.graph);
+  r.graph = optimize_pose_graph(r.dr_poses, edges_of(r.constraints), config.graph);
   r.optimized_poses = r.graph.poses;
   clock.done("graph");
   check(cancel);

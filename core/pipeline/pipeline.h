@@ -43,6 +43,10 @@ struct PipelineConfig {
   SwitchConfig switching;
   AcceptanceConfig acceptance;
   QualityConfig quality;
+  // `mchs` registers in survey order, this many submaps at a time, each batch predicted from
+  // the trajectory corrected so far (pipeline.cpp, register_incrementally). 0: all at once,
+  // every guess straight from dead reckoning, as `gicp` always does.
+  int batch_submaps = 10;
   int threads = 0;  // 0: all cores
 };
 

@@ -40,6 +40,10 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
   PairRegistration r;
   r.coarse = guess;
   r.anchor = centroid_of(*source_overlap);
+  r.registration.source_to_target = guess;
+  // GICP needs each point's neighbours for its covariances; a sliver of overlap has too few.
+  const auto too_few = static_cast<std::size_t>(gicp.neighbours + 1);
+  if (target_overlap->size() < too_few || source_overlap->size() < too_few) return r;  // not converged, no overlap
   r.registration = register_gicp(target_overlap, source_overlap, guess, gicp);
   r.inlier_ratio = r.registration.quality.fitness;
   return r;

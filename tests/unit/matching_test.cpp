@@ -94,6 +94,15 @@ TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
   EXPECT_NE(rejection_reason(r, claimed, {}, true), "") << "accepted: " << r.why << ", inliers " << r.inlier_ratio;
 }
 
+TEST(DirectRegistration, ASliverOfOverlapIsRefusedNotRegistered) {
+  const SyntheticTerrain rough = SyntheticTerrain::with_mounds(41);
+  const PairClouds p = pair_of(rough, rough, pose(0, 0, 0));
+  // Dead reckoning puts the source 39.5 m east: a strip of a few points overlaps.
+  const PairRegistration r = register_direct(*p.target, *p.source, pose(39.9, 0, 0), GicpConfig{}, 0.0);
+  EXPECT_FALSE(r.registration.quality.converged);
+  EXPECT_EQ(rejection_reason(r, pose(39.9, 0, 0), {}, false), "no overlapping points");
+}
+
 TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
   for (double x = 0.0; x < 1.0; x += 0.01) {
     EXPECT_LE(inlier_ratio_weight(x), inlier_ratio_weight(x + 0.01));
