@@ -13,10 +13,10 @@ nlohmann::json stats_json(const ErrorStats& s) {
           {"p99", s.p99},   {"max", s.max},   {"count", s.count}};
 }
 
-// A reason without its numbers ("inlier ratio 0.21 < 0.25" -> "inlier ratio"), for counting.
+// A reason without its numbers and details ("inlier ratio 0.21 < 0.25" -> "inlier ratio"), for
+// counting.
 std::string kind_of(const std::string& reason) {
-  const std::size_t digit = reason.find_first_of("0123456789");
-  std::string kind = reason.substr(0, digit);
+  std::string kind = reason.substr(0, reason.find_first_of("0123456789("));
   while (!kind.empty() && kind.back() == ' ') kind.pop_back();
   return kind;
 }
