@@ -172,14 +172,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       results_.save_origin(id, result.submaps.origin);
       results_.save_submaps(id, result.submaps.submaps);
     });
-    store("constraints", [&] {
-      std::vector<storage::StoredConstraint> constraints;
-      for (const Constraint& c : result.constraints)
-        constraints.push_back({c, c.type == ConstraintType::kOdometry ? storage::RegistrationPath::kNone
-                                  : c.path == "feature-aided"         ? storage::RegistrationPath::kFeatureAided
-                                                                      : storage::RegistrationPath::kDirect});
-      results_.save_constraints(id, constraints);
-    });
+    store("constraints", [&] { results_.save_constraints(id, result.constraints); });
     store("optimized poses", [&] { results_.save_optimized_poses(id, result.optimized_poses); });
     event("map", 0, "fusing and tiling");
     const MapProducts map = make_map_products(result, bundle.survey->metadata, FuseConfig{}, options_.scratch);

@@ -73,22 +73,6 @@ std::string polygon(const Footprint& footprint) {
   return text + ")";
 }
 
-std::string to_string(RegistrationPath path) {
-  switch (path) {
-    case RegistrationPath::kDirect: return "direct";
-    case RegistrationPath::kFeatureAided: return "feature-aided";
-    case RegistrationPath::kNone: break;
-  }
-  throw std::logic_error("no name for RegistrationPath::kNone");
-}
-
-RegistrationPath parse_path(const std::optional<std::string>& text) {
-  if (!text) return RegistrationPath::kNone;
-  if (*text == "direct") return RegistrationPath::kDirect;
-  if (*text == "feature-aided") return RegistrationPath::kFeatureAided;
-  throw std::runtime_error("unknown registration path '" + *text + "'");
-}
-
 ConstraintType parse_constraint_type(std::string_view text) {
   if (text == "odometry") return ConstraintType::kOdometry;
   if (text == "adjacent") return ConstraintType::kAdjacent;
@@ -149,40 +133,43 @@ std::vector<int> ResultStore::submaps_overlapping(std::int64_t job_id, const Eig
   return indices;
 }
 
-void ResultStore::save_constraints(std::int64_t job_id, const std::vector<StoredConstraint>& constraints) {
+void ResultStore::save_constraints(std::int64_t job_id, const std::vector<Constraint>& constraints) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   for (std::size_t i = 0; i < constraints.size(); ++i) {
-    const Constraint& c = constraints[i].constraint;
-    if ((c.type == ConstraintType::kOdometry) != (constraints[i].path == RegistrationPath::kNone))
+    const Constraint& c = constraints[i];
+    if ((c.type == ConstraintType::kOdometry) != c.path.empty())
       throw std::invalid_argument("constraint " + std::to_string(i) +
                                   ": odometry constraints have no registration path, registrations need one");
     // Row-major, the order a reader of the table expects.
     const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> information = c.information;
     std::optional<std::string> path;
-    if (constraints[i].path != RegistrationPath::kNone) path = to_string(constraints[i].path);
+    if (!c.path.empty()) path = c.path;
     connection->exec(
         "INSERT INTO constraints (job_id, idx, type, path, from_submap, to_submap, measured, information,"
-        " converged, fitness, overlap_points, overlap_mse_m2, overlap_fraction, accepted, reason)"
-        " VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15)",
+        " converged, fitness, overlap_points, overlap_mse_m2, overlap_fraction, accepted, reason,"
+        " anchor, path_reason, feature_density, matches, inlier_ratio)"
+        " VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20)",
         {job_id, i, bathyslam::to_string(c.type), path, c.from, c.to, pose_array(c.measured),
          float8_array(information.data(), 36), c.quality.converged, c.quality.fitness, c.quality.overlap_points,
-         c.quality.overlap_mse_m2, c.overlap_fraction, c.accepted, c.reason});
+         c.quality.overlap_mse_m2, c.overlap_fraction, c.accepted, c.reason, float8_array(c.anchor.data(), 3),
+         c.path_reason, c.feature_density, c.matches, c.inlier_ratio});
   }
   transaction.commit();
 }
 
-std::vector<StoredConstraint> ResultStore::load_constraints(std::int64_t job_id) {
+std::vector<Constraint> ResultStore::load_constraints(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Result rows = connection->exec(
       "SELECT type, path, from_submap, to_submap, measured, information, converged, fitness, overlap_points,"
-      " overlap_mse_m2, overlap_fraction, accepted, reason FROM constraints WHERE job_id = $1 ORDER BY idx",
+      " overlap_mse_m2, overlap_fraction, accepted, reason, anchor, path_reason, feature_density, matches,"
+      " inlier_ratio FROM constraints WHERE job_id = $1 ORDER BY idx",
       {job_id});
-  std::vector<StoredConstraint> constraints(rows.rows());
+  std::vector<Constraint> constraints(rows.rows());
   for (int row = 0; row < rows.rows(); ++row) {
-    Constraint& c = constraints[row].constraint;
+    Constraint& c = constraints[row];
     c.type = parse_constraint_type(rows.text(row, 0));
-    constraints[row].path = parse_path(rows.optional_text(row, 1));
+    c.path = rows.optional_text(row, 1).value_or("");
     c.from = static_cast<int>(rows.int64(row, 2));
     c.to = static_cast<int>(rows.int64(row, 3));
     c.measured = parse_pose(rows.text(row, 4));
@@ -196,6 +183,13 @@ std::vector<StoredConstraint> ResultStore::load_constraints(std::int64_t job_id)
     c.overlap_fraction = rows.float8(row, 10);
     c.accepted = rows.boolean(row, 11);
     c.reason = rows.text(row, 12);
+    const std::vector<double> anchor = parse_float8_array(rows.text(row, 13));
+    if (anchor.size() != 3) throw std::runtime_error("an anchor needs 3 numbers");
+    c.anchor = Eigen::Vector3d(anchor[0], anchor[1], anchor[2]);
+    c.path_reason = rows.text(row, 14);
+    c.feature_density = rows.float8(row, 15);
+    c.matches = static_cast<int>(rows.int64(row, 16));
+    c.inlier_ratio = rows.float8(row, 17);
   }
   return constraints;
 }

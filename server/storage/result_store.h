@@ -16,14 +16,6 @@
 
 namespace bathyslam::storage {
 
-// How a registration constraint was measured; core will tell the two apart with the feature path.
-enum class RegistrationPath { kNone, kDirect, kFeatureAided };  // kNone: odometry
-
-struct StoredConstraint {
-  Constraint constraint;
-  RegistrationPath path = RegistrationPath::kNone;
-};
-
 struct TileKey {
   std::string format;  // geotiff or openvdb
   int level = 0;
@@ -64,8 +56,9 @@ class ResultStore {
   // Submaps whose DR footprint meets the rectangle (map frame): the lookup of tiling.
   std::vector<int> submaps_overlapping(std::int64_t job_id, const Eigen::AlignedBox2d& area);
 
-  void save_constraints(std::int64_t job_id, const std::vector<StoredConstraint>& constraints);
-  std::vector<StoredConstraint> load_constraints(std::int64_t job_id);  // in saved order
+  // Registrations need a path ("direct" or "feature-aided"), odometry constraints have none.
+  void save_constraints(std::int64_t job_id, const std::vector<Constraint>& constraints);
+  std::vector<Constraint> load_constraints(std::int64_t job_id);  // in saved order
 
   void save_optimized_poses(std::int64_t job_id, const std::vector<Eigen::Isometry3d>& poses);  // by submap
   std::vector<Eigen::Isometry3d> load_optimized_poses(std::int64_t job_id);

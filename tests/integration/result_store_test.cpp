@@ -95,14 +95,14 @@ TEST(ResultStore, FootprintsAnswerTheTilingLookup) {
 TEST(ResultStore, ConstraintsRoundTripEveryField) {
   JobFixture f;
   f.results.save_submaps(f.job, {a_submap(0, false), a_submap(1, false), a_submap(2, false)});
-  StoredConstraint odometry;
-  odometry.constraint.type = ConstraintType::kOdometry;
-  odometry.constraint.from = 0;
-  odometry.constraint.to = 1;
-  odometry.constraint.measured = a_pose(0.01, 40.0, 0.125, -0.5);
-  StoredConstraint registration;
-  Constraint& c = registration.constraint;
-  registration.path = RegistrationPath::kDirect;
+  Constraint odometry;
+  odometry.type = ConstraintType::kOdometry;
+  odometry.from = 0;
+  odometry.to = 1;
+  odometry.measured = a_pose(0.01, 40.0, 0.125, -0.5);
+  Constraint registration;
+  Constraint& c = registration;
+  c.path = "feature-aided";
   c.type = ConstraintType::kAdjacent;
   c.from = 0;
   c.to = 2;
@@ -113,16 +113,21 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
   c.overlap_fraction = 0.37;
   c.accepted = false;
   c.reason = "overlap MSE 6.1 m² > 5 m²";
+  c.anchor = Eigen::Vector3d(1.0 / 3.0, -14.75, 10.125);
+  c.path_reason = "feature density 0.0210 >= 0.0050, 46 matches";
+  c.feature_density = 0.021;
+  c.matches = 46;
+  c.inlier_ratio = 0.8125;
   f.results.save_constraints(f.job, {odometry, registration});
 
-  std::vector<StoredConstraint> loaded = f.results.load_constraints(f.job);
+  std::vector<Constraint> loaded = f.results.load_constraints(f.job);
   ASSERT_EQ(loaded.size(), 2u);
-  EXPECT_EQ(loaded[0].path, RegistrationPath::kNone);
-  EXPECT_EQ(loaded[0].constraint.type, ConstraintType::kOdometry);
-  EXPECT_EQ(loaded[0].constraint.information, Information6::Identity());
-  EXPECT_TRUE(loaded[0].constraint.accepted);
-  const Constraint& l = loaded[1].constraint;
-  EXPECT_EQ(loaded[1].path, RegistrationPath::kDirect);
+  EXPECT_EQ(loaded[0].path, "");
+  EXPECT_EQ(loaded[0].type, ConstraintType::kOdometry);
+  EXPECT_EQ(loaded[0].information, Information6::Identity());
+  EXPECT_TRUE(loaded[0].accepted);
+  const Constraint& l = loaded[1];
+  EXPECT_EQ(l.path, c.path);
   EXPECT_EQ(l.type, c.type);
   EXPECT_EQ(l.from, c.from);
   EXPECT_EQ(l.to, c.to);
@@ -135,13 +140,18 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
   EXPECT_EQ(l.overlap_fraction, c.overlap_fraction);
   EXPECT_EQ(l.accepted, c.accepted);
   EXPECT_EQ(l.reason, c.reason);
+  EXPECT_EQ(l.anchor, c.anchor);
+  EXPECT_EQ(l.path_reason, c.path_reason);
+  EXPECT_EQ(l.feature_density, c.feature_density);
+  EXPECT_EQ(l.matches, c.matches);
+  EXPECT_EQ(l.inlier_ratio, c.inlier_ratio);
 
   // A constraint to a submap the job does not have, or without its path, changes nothing.
-  StoredConstraint dangling = registration;
-  dangling.constraint.to = 7;
+  Constraint dangling = registration;
+  dangling.to = 7;
   EXPECT_THROW(f.results.save_constraints(f.job, {dangling}), DatabaseError);
-  StoredConstraint pathless = registration;
-  pathless.path = RegistrationPath::kNone;
+  Constraint pathless = registration;
+  pathless.path.clear();
   EXPECT_THROW(f.results.save_constraints(f.job, {pathless}), std::invalid_argument);
   EXPECT_EQ(f.results.load_constraints(f.job).size(), 2u);
 }
@@ -181,8 +191,8 @@ TEST(ResultStore, DeletingASurveyRemovesEverythingUnderIt) {
   for (auto [survey, job] : {std::pair{f.survey, f.job}, std::pair{other, other_job}}) {
     f.surveys.save_validation(survey, {true, nlohmann::json::array(), nullptr});
     f.results.save_submaps(job, {a_submap(0, true), a_submap(1, true)});
-    StoredConstraint odometry;
-    odometry.constraint.to = 1;
+    Constraint odometry;
+    odometry.to = 1;
     f.results.save_constraints(job, {odometry});
     f.results.save_optimized_poses(job, {a_pose(0, 0, 0, 0), a_pose(0, 1, 0, 0)});
     f.results.put_tile(job, {"openvdb", 0, 0, 0}, {1});
