@@ -11,12 +11,6 @@ std::string format(const char* pattern, double a, double b) {
   return text;
 }
 
-Eigen::Vector3d centroid_of(const Cloud& cloud) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const pcl::PointXYZ& p : cloud) sum += p.getVector3fMap().cast<double>();
-  return cloud.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(cloud.size()));
-}
-
 }  // namespace
 
 SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints) {
@@ -39,7 +33,7 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
   const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);
   PairRegistration r;
   r.coarse = guess;
-  r.anchor = centroid_of(*source_overlap);
+  r.anchor = centroid(*source_overlap);
   r.registration.source_to_target = guess;
   // GICP needs each point's neighbours for its covariances; a sliver of overlap has too few.
   const auto too_few = static_cast<std::size_t>(gicp.neighbours + 1);

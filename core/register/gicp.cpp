@@ -58,13 +58,13 @@ RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
   return q;
 }
 
-namespace {
-
-Eigen::Vector3f centroid(const Cloud& cloud) {
+Eigen::Vector3d centroid(const Cloud& cloud) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (const pcl::PointXYZ& p : cloud) sum += p.getVector3fMap().cast<double>();
-  return cloud.empty() ? Eigen::Vector3f::Zero() : Eigen::Vector3f((sum / static_cast<double>(cloud.size())).cast<float>());
+  return cloud.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(cloud.size()));
 }
+
+namespace {
 
 Cloud::Ptr shifted(const Cloud& cloud, const Eigen::Vector3f& by) {
   auto out = std::make_shared<Cloud>(cloud);
@@ -99,8 +99,8 @@ Registration register_gicp(const Cloud::ConstPtr& target, const Cloud::ConstPtr&
   // metres from an adjacent line's overlap: yaw and translation are then nearly the same motion
   // and the solver stalls short of the minimum. Registering about the clouds' centroids
   // decouples them.
-  const Eigen::Vector3f target_centre = config.about_centroid ? centroid(*target) : Eigen::Vector3f::Zero();
-  const Eigen::Vector3f source_centre = config.about_centroid ? centroid(*source) : Eigen::Vector3f::Zero();
+  const Eigen::Vector3f target_centre = config.about_centroid ? Eigen::Vector3f(centroid(*target).cast<float>()) : Eigen::Vector3f::Zero();
+  const Eigen::Vector3f source_centre = config.about_centroid ? Eigen::Vector3f(centroid(*source).cast<float>()) : Eigen::Vector3f::Zero();
   const Eigen::Isometry3d to_target_centre(Eigen::Translation3d(-target_centre.cast<double>()));
   const Eigen::Isometry3d from_source_centre(Eigen::Translation3d(source_centre.cast<double>()));
   const Cloud::Ptr centred_target = shifted(*target, -target_centre);

@@ -58,6 +58,9 @@ Cloud::Ptr crop_to_overlap(const Cloud& cloud, const Cloud& other, const Eigen::
 Eigen::Isometry3d keep_dr_roll_pitch(const Eigen::Isometry3d& registered, const Eigen::Isometry3d& guess,
                                      const Eigen::Vector3d& anchor);
 
+// Mean of a cloud's points (zero for an empty cloud), summed in double.
+Eigen::Vector3d centroid(const Cloud& cloud);
+
 // Overlap of `source` (moved by `source_to_target`) with `target`.
 RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
                                     const Eigen::Isometry3d& source_to_target, double max_distance_m);
