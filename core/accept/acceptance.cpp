@@ -58,14 +58,13 @@ double overlap_points_weight(double points) {
   return piecewise<3>({{{500, 0.2}, {2000, 0.6}, {10000, 1.0}}}, points);
 }
 
-Information6 quality_information(const PairRegistration& r, double switch_density, const QualityConfig& config) {
+Information6 quality_information(const PairRegistration& r, const QualityConfig& config) {
   const RegistrationQuality& q = r.registration.quality;
   const double weight = inlier_ratio_weight(r.inlier_ratio) * overlap_mse_weight(q.overlap_mse_m2) *
                         overlap_points_weight(static_cast<double>(q.overlap_points));
   Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
-  if (r.path == RegistrationPath::kDirect && switch_density > 0) {
-    const double observability = std::clamp(r.feature_density / switch_density, 0.01, 1.0);
-    for (int k : {0, 1, 5}) information(k, k) *= observability;
+  if (r.path == RegistrationPath::kDirect) {
+    for (int k : {0, 1, 5}) information(k, k) *= config.direct_horizontal_share;
   }
   return information;
 }

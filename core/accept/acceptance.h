@@ -27,6 +27,12 @@ struct QualityConfig {
   // Information of a perfect registration, compared at the overlap (the edge's anchor).
   Eigen::Vector3d best_sigma_translation_m{0.1, 0.1, 0.05};
   Eigen::Vector3d best_sigma_rotation_rad{0.002, 0.002, 0.004};
+  // Share of that information in x, y and yaw that a direct-path edge keeps. The switch sends
+  // a pair down the direct path when its overlap has too few features to match, and there
+  // GICP's horizontal answer is its starting guess: measured on `lake`, such edges carry the
+  // guess's error (metres to tens of metres) with a good residual. They constrain depth,
+  // roll and pitch; the horizontal comes from dead reckoning and feature-aided edges.
+  double direct_horizontal_share = 0.0;
 };
 
 // Each factor in (0, 1], piecewise linear between the knots given in the README ("MCHS").
@@ -35,8 +41,7 @@ double overlap_mse_weight(double mse_m2);
 double overlap_points_weight(double points);
 
 // Information = that of a perfect registration scaled by the three weights' product; on the
-// direct path the horizontal and yaw entries are further scaled by the pair's feature density
-// over the switch threshold (at most 1), since a flat overlap leaves them unobserved.
-Information6 quality_information(const PairRegistration& r, double switch_density, const QualityConfig& config);
+// direct path the horizontal and yaw entries are further scaled by direct_horizontal_share.
+Information6 quality_information(const PairRegistration& r, const QualityConfig& config);
 
 }  // namespace bathyslam

@@ -5,6 +5,14 @@
 namespace bathyslam {
 namespace {
 
+// S with SᵀS = information. Not Cholesky: an edge may leave directions it does not observe at
+// zero information, and Cholesky of a singular matrix divides by zero.
+Information6 square_root(const Information6& information) {
+  const Eigen::SelfAdjointEigenSolver<Information6> eigen(information);
+  const Eigen::Matrix<double, 6, 1> roots = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return roots.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
 // Error of a relative-pose measurement between two nodes (position, unit quaternion), whitened
 // by the square root of its information.
 class RelativePoseCost {
@@ -34,7 +42,7 @@ class RelativePoseCost {
   }
 
   static ceres::CostFunction* create(const PoseGraphEdge& edge) {
-    const Information6 sqrt_information = edge.information.llt().matrixU();
+    const Information6 sqrt_information = square_root(edge.information);
     return new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
         new RelativePoseCost(edge.measured, edge.anchor, sqrt_information));
   }

@@ -71,6 +71,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("quality.sigma_roll_rad", c.quality.best_sigma_rotation_rad.x(), 1e-6, 10);
   visit("quality.sigma_pitch_rad", c.quality.best_sigma_rotation_rad.y(), 1e-6, 10);
   visit("quality.sigma_yaw_rad", c.quality.best_sigma_rotation_rad.z(), 1e-6, 10);
+  visit("quality.direct_horizontal_share", c.quality.direct_horizontal_share, 0, 1);
   visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
   visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
   visit("batch_submaps", c.batch_submaps, 0, 1000000);
@@ -148,7 +149,7 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
   Constraint c = constraint_of(typed, reg, guess);
   c.reason = rejection_reason(reg, guess, config.acceptance, typed.type == ConstraintType::kLoop);
   c.accepted = c.reason.empty();
-  if (c.accepted) c.information = quality_information(reg, config.switching.min_feature_density, config.quality);
+  if (c.accepted) c.information = quality_information(reg, config.quality);
   return c;
 }
 

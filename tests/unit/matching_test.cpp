@@ -123,8 +123,26 @@ TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
   better.registration.quality.overlap_mse_m2 = 0.1;
   worse.registration.quality.overlap_points = 800;
   better.registration.quality.overlap_points = 6000;
-  const Information6 a = quality_information(worse, 0.005, {}), b = quality_information(better, 0.005, {});
+  const Information6 a = quality_information(worse, {}), b = quality_information(better, {});
   for (int k = 0; k < 6; ++k) EXPECT_LT(a(k, k), b(k, k));
+}
+
+TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGiven) {
+  PairRegistration direct;
+  direct.path = RegistrationPath::kDirect;
+  direct.inlier_ratio = 0.9;
+  direct.registration.quality.overlap_mse_m2 = 0.1;
+  direct.registration.quality.overlap_points = 6000;
+  PairRegistration featured = direct;
+  featured.path = RegistrationPath::kFeatureAided;
+  QualityConfig config;
+  const Information6 f = quality_information(featured, config);
+  for (double share : {0.0, 0.1}) {
+    config.direct_horizontal_share = share;
+    const Information6 d = quality_information(direct, config);
+    for (int k : {0, 1, 5}) EXPECT_DOUBLE_EQ(d(k, k), share * f(k, k)) << "x, y, yaw: entry " << k;
+    for (int k : {2, 3, 4}) EXPECT_DOUBLE_EQ(d(k, k), f(k, k)) << "z, roll, pitch: entry " << k;
+  }
 }
 
 }  // namespace

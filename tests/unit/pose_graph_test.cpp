@@ -76,6 +76,26 @@ TEST(PoseGraph, AnAnchoredEdgeComparesTranslationAtItsAnchor) {
       << "compared at the origin, the 1 degree becomes a quarter metre";
 }
 
+// A flat-ground registration observes depth but not where it is: with zero information in x,
+// y and yaw, its (wrong) horizontal measurement must not move the pose, its depth must.
+TEST(PoseGraph, AnEdgeWithZeroHorizontalInformationCorrectsDepthOnly) {
+  const std::vector<Eigen::Isometry3d> truth = {pose(0, 0, 0), pose(20, 0, 0)};
+  Eigen::Isometry3d dr = truth[1];
+  dr.translation().z() += 0.8;
+  Eigen::Isometry3d flat = truth[0].inverse() * truth[1];
+  flat.translation() += Eigen::Vector3d(6, -4, 0);  // horizontally wrong, depth right
+  Information6 depth_only = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
+  for (int k : {0, 1, 5}) depth_only(k, k) = 0;
+  const std::vector<PoseGraphEdge> edges = {{0, 1, truth[0].inverse() * dr, information_from_sigmas({5, 5, 1}, {1e-4, 1e-4, 1e-2}), false},
+                                            {0, 1, flat, depth_only, true}};
+  const GraphSolution solution = optimize_pose_graph({truth[0], dr}, edges);
+  ASSERT_TRUE(solution.converged);
+  const Eigen::Vector3d p = solution.poses[1].translation();
+  EXPECT_NEAR(p.x(), 20.0, 1e-3);
+  EXPECT_NEAR(p.y(), 0.0, 1e-3);
+  EXPECT_NEAR(p.z(), truth[1].translation().z(), 0.01) << "depth follows the registration";
+}
+
 TEST(PoseGraph, OdometryAloneKeepsDeadReckoning) {
   std::vector<Eigen::Isometry3d> dr = {pose(0, 0, 0), pose(10, 1, 0.1), pose(19, 4, 0.3)};
   std::vector<PoseGraphEdge> edges;
