@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
 #include <utility>
+
+#include "core/types/format.h"
 
 namespace bathyslam {
 namespace {
@@ -20,12 +21,6 @@ double piecewise(const std::array<std::pair<double, double>, N>& knots, double x
     }
   }
   return knots.back().second;
-}
-
-std::string format(const char* pattern, double a, double b) {
-  char text[128];
-  std::snprintf(text, sizeof text, pattern, a, b);
-  return text;
 }
 
 }  // namespace

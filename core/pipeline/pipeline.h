@@ -30,6 +30,7 @@ struct PipelineConfig {
   VoxelConfig voxel;
   CandidateConfig candidates;
   GicpConfig gicp;
+  double crop_margin_m = 1.0;  // registration sees the DR-predicted overlap widened by this
   GraphConfig graph;
   ConsistencyConfig consistency;
   // `gicp`: every registration edge gets the same information, as in the paper's baseline.

@@ -1,17 +1,8 @@
 #include "core/register/coarse_to_fine.h"
 
-#include <cstdio>
+#include "core/types/format.h"
 
 namespace bathyslam {
-namespace {
-
-std::string format(const char* pattern, double a, double b) {
-  char text[128];
-  std::snprintf(text, sizeof text, pattern, a, b);
-  return text;
-}
-
-}  // namespace
 
 SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints) {
   const TerrainGrid terrain = grid_terrain(submap.points, grid);
