@@ -3,10 +3,12 @@
 # bundle with each configuration, and prints one markdown row per (seed, configuration).
 #   bench/scenario_table.sh [--scenario lake] [--drift paper] [--seeds "1 2 3 4 5"]
 #                           [--configs "odometry gicp"] [--work DIR]
-# Bundles and outputs go under DIR (default /tmp/bathyslam-bench) and are reused when present.
+#                           [--set "key=value ..."] [--tag NAME]
+# Bundles and outputs go under DIR (default /tmp/bathyslam-bench) and are reused when present;
+# --set passes parameters to every run, --tag names their output directories apart.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenario=lake drift=paper seeds="1 2 3 4 5" configs="odometry gicp" work=/tmp/bathyslam-bench
+scenario=lake drift=paper seeds="1 2 3 4 5" configs="odometry gicp" work=/tmp/bathyslam-bench sets="" tag=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scenario) scenario=$2; shift 2 ;;
@@ -14,6 +16,8 @@ while [[ $# -gt 0 ]]; do
     --seeds) seeds=$2; shift 2 ;;
     --configs) configs=$2; shift 2 ;;
     --work) work=$2; shift 2 ;;
+    --set) sets=$2; shift 2 ;;
+    --tag) tag=-$2; shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -25,8 +29,10 @@ for seed in $seeds; do
   bundle=$work/$scenario-$drift-$seed
   [[ -f $bundle/survey.json ]] || "$bathyslam" simulate --scenario "$scenario" --drift "$drift" --seed "$seed" --out "$bundle" >/dev/null
   for config in $configs; do
-    out=$bundle-$config
-    "$bathyslam" process "$bundle" --config "$config" --out "$out" >/dev/null
+    out=$bundle-$config$tag
+    set_args=()
+    for kv in $sets; do set_args+=(--set "$kv"); done
+    "$bathyslam" process "$bundle" --config "$config" --out "$out" "${set_args[@]}" >/dev/null
     python3 - "$out/report.json" "$seed" "$config" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))

@@ -32,6 +32,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("gicp.refine_correspondence_m", c.gicp.refine_correspondence_m, 0, 100);
   visit("gicp.refine_convergence", c.gicp.refine_convergence, 1e-12, 1);
   visit("register.crop_margin_m", c.crop_margin_m, 0, 100);
+  visit("register.feature_refine_correspondence_m", c.feature_refine_correspondence_m, 0, 100);
   visit("gicp.about_centroid", c.gicp.about_centroid, 0, 1);
   visit("gicp.sigma_x_m", c.gicp_sigma_translation_m.x(), 1e-4, 1e3);
   visit("gicp.sigma_y_m", c.gicp_sigma_translation_m.y(), 1e-4, 1e3);
@@ -143,7 +144,8 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
                          const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
-  const CoarseToFineConfig c2f{config.switching, config.matching, config.ransac, config.gicp, config.crop_margin_m};
+  const CoarseToFineConfig c2f{config.switching, config.matching, config.ransac, config.gicp, config.crop_margin_m,
+                               config.feature_refine_correspondence_m};
   const uint64_t seed = config.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
   const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
                                                        features[pair.source], guess, c2f, seed);

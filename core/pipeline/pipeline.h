@@ -31,6 +31,7 @@ struct PipelineConfig {
   CandidateConfig candidates;
   GicpConfig gicp;
   double crop_margin_m = 1.0;  // registration sees the DR-predicted overlap widened by this
+  double feature_refine_correspondence_m = 1.0;  // coarse_to_fine.h
   GraphConfig graph;
   ConsistencyConfig consistency;
   // `gicp`: every registration edge gets the same information, as in the paper's baseline.

@@ -66,7 +66,12 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
   const RansacResult coarse = adaptive_ransac(from, to, ransac);
 
   // GICP refines the feature estimate on the overlap that estimate predicts.
-  PairRegistration r = register_direct(target, source, coarse.source_to_target, config.gicp, config.crop_margin_m);
+  GicpConfig refine = config.gicp;
+  if (config.feature_refine_correspondence_m > 0) {
+    refine.about_centroid = 1;
+    refine.refine_correspondence_m = config.feature_refine_correspondence_m;
+  }
+  PairRegistration r = register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m);
   r.path = RegistrationPath::kFeatureAided;
   r.why = format("feature density %.4f >= %.4f", density, config.switching.min_feature_density) + ", " +
           std::to_string(matches.size()) + " matches";

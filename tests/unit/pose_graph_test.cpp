@@ -77,23 +77,31 @@ TEST(PoseGraph, AnAnchoredEdgeComparesTranslationAtItsAnchor) {
 }
 
 // A flat-ground registration observes depth but not where it is: with zero information in x,
-// y and yaw, its (wrong) horizontal measurement must not move the pose, its depth must.
+// y and yaw, its (wrong) horizontal measurement must not move the pose, its depth must, and
+// that holds on a vehicle that rolls and pitches (the error is taken in a level frame).
 TEST(PoseGraph, AnEdgeWithZeroHorizontalInformationCorrectsDepthOnly) {
-  const std::vector<Eigen::Isometry3d> truth = {pose(0, 0, 0), pose(20, 0, 0)};
-  Eigen::Isometry3d dr = truth[1];
-  dr.translation().z() += 0.8;
-  Eigen::Isometry3d flat = truth[0].inverse() * truth[1];
-  flat.translation() += Eigen::Vector3d(6, -4, 0);  // horizontally wrong, depth right
-  Information6 depth_only = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
-  for (int k : {0, 1, 5}) depth_only(k, k) = 0;
-  const std::vector<PoseGraphEdge> edges = {{0, 1, truth[0].inverse() * dr, information_from_sigmas({5, 5, 1}, {1e-4, 1e-4, 1e-2}), false},
-                                            {0, 1, flat, depth_only, true}};
-  const GraphSolution solution = optimize_pose_graph({truth[0], dr}, edges);
-  ASSERT_TRUE(solution.converged);
-  const Eigen::Vector3d p = solution.poses[1].translation();
-  EXPECT_NEAR(p.x(), 20.0, 1e-3);
-  EXPECT_NEAR(p.y(), 0.0, 1e-3);
-  EXPECT_NEAR(p.z(), truth[1].translation().z(), 0.01) << "depth follows the registration";
+  for (const double tilt_deg : {0.0, 1.0}) {
+    Eigen::Isometry3d a = pose(0, 0, 0.3), b = pose(20, 0, 0.3);
+    const Eigen::Matrix3d tilt = (Eigen::AngleAxisd(tilt_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
+                                  Eigen::AngleAxisd(-tilt_deg * M_PI / 180, Eigen::Vector3d::UnitY())).toRotationMatrix();
+    a.linear() = a.linear() * tilt;
+    b.linear() = b.linear() * tilt;
+    Eigen::Isometry3d dr = b;
+    dr.translation().z() += 0.8;
+    Eigen::Isometry3d flat = b;
+    flat.translation() += Eigen::Vector3d(15, -10, 0);  // 18 m wrong along the (level) bottom, depth right
+    Information6 depth_only = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
+    for (int k : {0, 1, 5}) depth_only(k, k) = 0;
+    const std::vector<PoseGraphEdge> edges = {
+        {0, 1, a.inverse() * dr, information_from_sigmas({5, 5, 1}, {1e-4, 1e-4, 1e-2}), false},
+        {0, 1, a.inverse() * flat, depth_only, true}};
+    const GraphSolution solution = optimize_pose_graph({a, dr}, edges);
+    ASSERT_TRUE(solution.converged);
+    const Eigen::Vector3d p = solution.poses[1].translation();
+    EXPECT_NEAR(p.x(), 20.0, 0.01) << "tilt " << tilt_deg;
+    EXPECT_NEAR(p.y(), 0.0, 0.01) << "tilt " << tilt_deg;
+    EXPECT_NEAR(p.z(), b.translation().z(), 0.01) << "depth follows the registration; tilt " << tilt_deg;
+  }
 }
 
 TEST(PoseGraph, OdometryAloneKeepsDeadReckoning) {
