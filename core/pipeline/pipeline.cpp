@@ -25,15 +25,15 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("candidates.parallel_tolerance_deg", c.candidates.parallel_tolerance_deg, 0, 90);
   visit("candidates.min_overlap_fraction", c.candidates.min_overlap_fraction, 0, 1);
   visit("candidates.loop_min_submap_gap", c.candidates.loop_min_submap_gap, 1, 100000);
-  visit("gicp.max_correspondence_m", c.gicp.max_correspondence_m, 0.01, 100);
-  visit("gicp.max_iterations", c.gicp.max_iterations, 1, 10000);
-  visit("gicp.convergence", c.gicp.convergence, 1e-12, 1);
-  visit("gicp.neighbours", c.gicp.neighbours, 3, 200);
-  visit("gicp.refine_correspondence_m", c.gicp.refine_correspondence_m, 0, 100);
-  visit("gicp.refine_convergence", c.gicp.refine_convergence, 1e-12, 1);
-  visit("register.crop_margin_m", c.crop_margin_m, 0, 100);
-  visit("register.feature_refine_correspondence_m", c.feature_refine_correspondence_m, 0, 100);
-  visit("gicp.about_centroid", c.gicp.about_centroid, 0, 1);
+  visit("gicp.max_correspondence_m", c.registration.gicp.max_correspondence_m, 0.01, 100);
+  visit("gicp.max_iterations", c.registration.gicp.max_iterations, 1, 10000);
+  visit("gicp.convergence", c.registration.gicp.convergence, 1e-12, 1);
+  visit("gicp.neighbours", c.registration.gicp.neighbours, 3, 200);
+  visit("gicp.refine_correspondence_m", c.registration.gicp.refine_correspondence_m, 0, 100);
+  visit("gicp.refine_convergence", c.registration.gicp.refine_convergence, 1e-12, 1);
+  visit("register.crop_margin_m", c.registration.crop_margin_m, 0, 100);
+  visit("register.feature_refine_correspondence_m", c.registration.feature_refine_correspondence_m, 0, 100);
+  visit("gicp.about_centroid", c.registration.gicp.about_centroid, 0, 1);
   visit("gicp.sigma_x_m", c.gicp_sigma_translation_m.x(), 1e-4, 1e3);
   visit("gicp.sigma_y_m", c.gicp_sigma_translation_m.y(), 1e-4, 1e3);
   visit("gicp.sigma_z_m", c.gicp_sigma_translation_m.z(), 1e-4, 1e3);
@@ -54,15 +54,15 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("keypoints.descriptor_size", c.keypoints.descriptor_size, 3, 63);
   visit("keypoints.min_tsd_m", c.keypoints.min_tsd_m, 0, 100);
   visit("keypoints.suppression_radius", c.keypoints.suppression_radius, 0, 50);
-  visit("matching.max_distance_m", c.matching.max_distance_m, 0.1, 1000);
-  visit("matching.min_ncc", c.matching.min_ncc, -1, 1);
-  visit("matching.ratio", c.matching.ratio, 0.01, 1);
-  visit("matching.min_matches", c.matching.min_matches, 3, 100000);
-  visit("ransac.max_iterations", c.ransac.max_iterations, 1, 1000000);
-  visit("ransac.initial_threshold_m", c.ransac.initial_threshold_m, 0.01, 100);
-  visit("ransac.min_threshold_m", c.ransac.min_threshold_m, 0.001, 100);
-  visit("ransac.target_inlier_ratio", c.ransac.target_inlier_ratio, 0.01, 1);
-  visit("switch.min_feature_density", c.switching.min_feature_density, 0, 1);
+  visit("matching.max_distance_m", c.registration.matching.max_distance_m, 0.1, 1000);
+  visit("matching.min_ncc", c.registration.matching.min_ncc, -1, 1);
+  visit("matching.ratio", c.registration.matching.ratio, 0.01, 1);
+  visit("matching.min_matches", c.registration.matching.min_matches, 3, 100000);
+  visit("ransac.max_iterations", c.registration.ransac.max_iterations, 1, 1000000);
+  visit("ransac.initial_threshold_m", c.registration.ransac.initial_threshold_m, 0.01, 100);
+  visit("ransac.min_threshold_m", c.registration.ransac.min_threshold_m, 0.001, 100);
+  visit("ransac.target_inlier_ratio", c.registration.ransac.target_inlier_ratio, 0.01, 1);
+  visit("switch.min_feature_density", c.registration.switching.min_feature_density, 0, 1);
   visit("accept.min_inlier_ratio", c.acceptance.min_inlier_ratio, 0, 1);
   visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
   visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
@@ -128,7 +128,8 @@ Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, cons
                             const std::vector<Cloud::Ptr>& clouds, const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
-  const PairRegistration reg = register_direct(*clouds[pair.target], *clouds[pair.source], guess, config.gicp, config.crop_margin_m);
+  const PairRegistration reg = register_direct(*clouds[pair.target], *clouds[pair.source], guess,
+                                               config.registration.gicp, config.registration.crop_margin_m);
   Constraint c = constraint_of(typed, reg, guess);
   c.information = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
   c.accepted = c.quality.converged && c.quality.overlap_points > 0;
@@ -144,11 +145,9 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
                          const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
-  const CoarseToFineConfig c2f{config.switching, config.matching, config.ransac, config.gicp, config.crop_margin_m,
-                               config.feature_refine_correspondence_m};
-  const uint64_t seed = config.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
+  const uint64_t seed = config.registration.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
   const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
-                                                       features[pair.source], guess, c2f, seed);
+                                                       features[pair.source], guess, config.registration, seed);
   Constraint c = constraint_of(typed, reg, guess);
   c.reason = rejection_reason(reg, guess, config.acceptance, typed.type == ConstraintType::kLoop);
   c.accepted = c.reason.empty();

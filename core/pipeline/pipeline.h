@@ -29,9 +29,9 @@ struct PipelineConfig {
   SubmapConfig submaps;
   VoxelConfig voxel;
   CandidateConfig candidates;
-  GicpConfig gicp;
-  double crop_margin_m = 1.0;  // registration sees the DR-predicted overlap widened by this
-  double feature_refine_correspondence_m = 1.0;  // coarse_to_fine.h
+  // GICP and the overlap crop for both registering configurations; the switch, matching,
+  // RANSAC and the feature-aided refinement for `mchs`.
+  CoarseToFineConfig registration;
   GraphConfig graph;
   ConsistencyConfig consistency;
   // `gicp`: every registration edge gets the same information, as in the paper's baseline: the
@@ -42,9 +42,6 @@ struct PipelineConfig {
   // `mchs`: the feature-aided path, the switch, loop closures, acceptance and quality weights.
   GridConfig grid;
   KeypointConfig keypoints;
-  MatchConfig matching;
-  RansacConfig ransac;
-  SwitchConfig switching;
   AcceptanceConfig acceptance;
   QualityConfig quality;
   // `mchs` registers in survey order, this many submaps at a time, each batch predicted from

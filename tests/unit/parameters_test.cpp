@@ -13,7 +13,7 @@ TEST(Parameters, SetByNameReachesTheStageConfig) {
   set_parameter(config, "gicp.max_iterations", "120");
   set_parameter(config, "voxel.leaf_z_m", "0.25");
   set_parameter(config, "graph.dr_sigma_yaw_rad", "0.02");
-  EXPECT_EQ(config.gicp.max_iterations, 120);
+  EXPECT_EQ(config.registration.gicp.max_iterations, 120);
   EXPECT_FLOAT_EQ(config.voxel.leaf_z_m, 0.25f);
   EXPECT_DOUBLE_EQ(config.graph.dr_sigma_rotation_rad.z(), 0.02);
   const auto all = parameters(config);
@@ -35,7 +35,7 @@ TEST(Parameters, BadNamesAndValuesAreRejectedByName) {
   EXPECT_THAT(message("gicp.max_iterations", "12.5"), HasSubstr("or not an integer"));
   EXPECT_THAT(message("gicp.max_iterations", "-3"), HasSubstr("is outside"));
   EXPECT_THAT(message("voxel.leaf_x_m", "0.2m"), HasSubstr("'0.2m' is not a number"));
-  EXPECT_EQ(config.gicp.max_iterations, 300) << "a rejected value changes nothing";
+  EXPECT_EQ(config.registration.gicp.max_iterations, 300) << "a rejected value changes nothing";
 }
 
 }  // namespace
