@@ -112,6 +112,7 @@ Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, co
   c.to = typed.pair.source;
   c.measured = keep_dr_roll_pitch(reg.registration.source_to_target, guess, reg.anchor);
   c.anchor = reg.anchor;
+  c.guess = guess;
   c.quality = reg.registration.quality;
   c.overlap_fraction = typed.pair.overlap_fraction;
   c.path = to_string(reg.path);

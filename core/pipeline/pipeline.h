@@ -65,6 +65,7 @@ struct Constraint {
   int from = 0, to = 0;
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();  // `to` in the frame of `from`
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // registrations: overlap centroid, `to`'s frame
+  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();     // registrations: where they started
   Information6 information = Information6::Identity();
   RegistrationQuality quality;   // registrations only
   double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time

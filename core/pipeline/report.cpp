@@ -68,9 +68,14 @@ nlohmann::json registrations_json(const PipelineResult& r) {
                         {"inlier_ratio", c.inlier_ratio},
                         {"accepted", c.accepted},
                         {"reason", c.reason}};
-    if (const auto e = relative_pose_error(r.submaps, c.from, c.to, c.measured)) {
-      j["error_vs_reference"] = {{"translation_m", e->translation_m}, {"horizontal_m", e->horizontal_m},
-                                 {"yaw_deg", e->yaw_deg}};
+    auto error_json = [&](const Eigen::Isometry3d& measured) -> nlohmann::json {
+      const auto e = relative_pose_error(r.submaps, c.from, c.to, measured);
+      if (!e) return nullptr;
+      return {{"translation_m", e->translation_m}, {"horizontal_m", e->horizontal_m}, {"yaw_deg", e->yaw_deg}};
+    };
+    if (nlohmann::json e = error_json(c.measured); !e.is_null()) {
+      j["error_vs_reference"] = e;
+      j["guess_error_vs_reference"] = error_json(c.guess);
     }
     list.push_back(std::move(j));
   }
