@@ -1,0 +1,93 @@
+// The trajectory error a perfect front end would leave: every candidate pair (K-adjacent and
+// loop, found at the reference poses) gets an edge equal to its true relative pose, with the
+// `mchs` best-quality information, and the graph is solved from dead reckoning as the pipeline
+// solves it. Registrations relate submaps to each other only, so whatever drift the survey's
+// geometry cannot see stays; this is the floor under any registration method's trajectory RMSE.
+//   bench_oracle_graph BUNDLE [--no-loops] [--adjacent-depth-only] [--edges REPORT] [key=value ...]
+// --edges takes the pairs from a report.json instead: its accepted registrations only, at the
+// truth, direct-path adjacent ones with depth, roll and pitch only, as `mchs` weighs them. This
+// separates what the front end got wrong from what the terrain never offered.
+// key=value: pipeline parameters, e.g. graph.dr_sigma_yaw_rad=0.005. --adjacent-depth-only
+// gives adjacent-line edges no x, y or yaw information, as a flat bottom would.
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/eval/metrics.h"
+#include "core/io/bundle.h"
+#include "core/pipeline/pipeline.h"
+
+using namespace bathyslam;
+
+int main(int argc, char** argv) try {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s BUNDLE [key=value ...]\n", argv[0]);
+    return 2;
+  }
+  PipelineConfig config;
+  bool loops_on = true, adjacent_depth_only = false;
+  std::string report;
+  for (int i = 2; i < argc; ++i) {
+    const std::string kv = argv[i];
+    if (kv == "--no-loops") { loops_on = false; continue; }
+    if (kv == "--adjacent-depth-only") { adjacent_depth_only = true; continue; }
+    if (kv == "--edges" && i + 1 < argc) { report = argv[++i]; continue; }
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("expected key=value, got '" + kv + "'");
+    set_parameter(config, kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  const Survey survey = load_bundle(argv[1]);
+  const SubmapSet set = build_submaps(survey, config.submaps);
+  std::vector<Eigen::Isometry3d> dr, reference;
+  for (const Submap& s : set.submaps) {
+    if (!s.reference_pose) throw std::runtime_error(std::string(argv[1]) + ": no reference_nav.csv");
+    dr.push_back(s.dr_pose);
+    reference.push_back(*s.reference_pose);
+  }
+  std::vector<PoseGraphEdge> edges;
+  const Information6 dr_information =
+      information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad);
+  for (std::size_t i = 1; i < dr.size(); ++i) {
+    edges.push_back({static_cast<int>(i - 1), static_cast<int>(i), dr[i - 1].inverse() * dr[i], dr_information});
+  }
+  const Information6 best = information_from_sigmas(config.quality.best_sigma_translation_m,
+                                                    config.quality.best_sigma_rotation_rad);
+  Information6 depth_only = best;
+  for (int k : {0, 1, 5}) depth_only(k, k) = 0;
+  std::size_t adjacent = 0, loops = 0;
+  auto add = [&](const std::vector<CandidatePair>& pairs, const Information6& information, std::size_t& count) {
+    for (const CandidatePair& p : pairs) {
+      edges.push_back({p.target, p.source, reference[p.target].inverse() * reference[p.source], information, true});
+      ++count;
+    }
+  };
+  if (report.empty()) {
+    add(adjacent_line_candidates(set, reference, config.candidates), adjacent_depth_only ? depth_only : best, adjacent);
+    if (loops_on) add(loop_candidates(set, reference, config.candidates), best, loops);
+  } else {
+    std::ifstream in(report);
+    const nlohmann::json parsed = nlohmann::json::parse(in);
+    for (const nlohmann::json& r : parsed.at("registrations")) {
+      if (!r.at("accepted").get<bool>()) continue;
+      const bool loop = r.at("type") == "loop";
+      const bool horizontal = loop || r.at("path") == "feature-aided";
+      CandidatePair pair;
+      pair.target = r.at("from").get<int>();
+      pair.source = r.at("to").get<int>();
+      add({pair}, horizontal ? best : depth_only, loop ? loops : adjacent);
+    }
+  }
+  const GraphSolution solution = optimize_pose_graph(dr, edges, config.graph);
+  const ErrorStats dr_stats = error_stats(trajectory_errors(set, dr));
+  const ErrorStats oracle = error_stats(trajectory_errors(set, solution.poses));
+  std::printf("%s: %zu submaps, %zu adjacent + %zu loop edges at the truth\n", argv[1], dr.size(), adjacent, loops);
+  std::printf("trajectory RMSE: dead reckoning %.2f m, perfect front end %.2f m (%.1f %% below)\n", dr_stats.rmse,
+              oracle.rmse, 100.0 * (1.0 - oracle.rmse / dr_stats.rmse));
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "bench_oracle_graph: %s\n", e.what());
+  return 1;
+}
