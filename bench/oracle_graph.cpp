@@ -3,12 +3,11 @@
 // `mchs` best-quality information, and the graph is solved from dead reckoning as the pipeline
 // solves it. Registrations relate submaps to each other only, so whatever drift the survey's
 // geometry cannot see stays; this is the floor under any registration method's trajectory RMSE.
-//   bench_oracle_graph BUNDLE [--no-loops] [--adjacent-depth-only] [--edges REPORT] [key=value ...]
+//   bench_oracle_graph BUNDLE [--no-loops] [--edges REPORT] [key=value ...]
 // --edges takes the pairs from a report.json instead: its accepted registrations only, at the
 // truth, direct-path adjacent ones with depth, roll and pitch only, as `mchs` weighs them. This
 // separates what the front end got wrong from what the terrain never offered.
-// key=value: pipeline parameters, e.g. graph.dr_sigma_yaw_rad=0.005. --adjacent-depth-only
-// gives adjacent-line edges no x, y or yaw information, as a flat bottom would.
+// key=value: pipeline parameters, e.g. graph.dr_sigma_yaw_rad=0.005.
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -24,16 +23,15 @@ using namespace bathyslam;
 
 int main(int argc, char** argv) try {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s BUNDLE [key=value ...]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s BUNDLE [--no-loops] [--edges REPORT] [key=value ...]\n", argv[0]);
     return 2;
   }
   PipelineConfig config;
-  bool loops_on = true, adjacent_depth_only = false;
+  bool loops_on = true;
   std::string report;
   for (int i = 2; i < argc; ++i) {
     const std::string kv = argv[i];
     if (kv == "--no-loops") { loops_on = false; continue; }
-    if (kv == "--adjacent-depth-only") { adjacent_depth_only = true; continue; }
     if (kv == "--edges" && i + 1 < argc) { report = argv[++i]; continue; }
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("expected key=value, got '" + kv + "'");
@@ -65,19 +63,31 @@ int main(int argc, char** argv) try {
     }
   };
   if (report.empty()) {
-    add(adjacent_line_candidates(set, reference, config.candidates), adjacent_depth_only ? depth_only : best, adjacent);
+    add(adjacent_line_candidates(set, reference, config.candidates), best, adjacent);
     if (loops_on) add(loop_candidates(set, reference, config.candidates), best, loops);
   } else {
     std::ifstream in(report);
-    const nlohmann::json parsed = nlohmann::json::parse(in);
-    for (const nlohmann::json& r : parsed.at("registrations")) {
-      if (!r.at("accepted").get<bool>()) continue;
-      const bool loop = r.at("type") == "loop";
-      const bool horizontal = loop || r.at("path") == "feature-aided";
-      CandidatePair pair;
-      pair.target = r.at("from").get<int>();
-      pair.source = r.at("to").get<int>();
-      add({pair}, horizontal ? best : depth_only, loop ? loops : adjacent);
+    if (!in) throw std::runtime_error(report + ": cannot be read");
+    try {
+      const nlohmann::json parsed = nlohmann::json::parse(in);
+      const nlohmann::json& registrations = parsed.at("registrations");
+      const int n = static_cast<int>(reference.size());
+      for (std::size_t k = 0; k < registrations.size(); ++k) {
+        const nlohmann::json& r = registrations[k];
+        if (!r.at("accepted").get<bool>()) continue;
+        const bool loop = r.at("type") == "loop";
+        const bool horizontal = loop || r.at("path") == "feature-aided";
+        CandidatePair pair;
+        pair.target = r.at("from").get<int>();
+        pair.source = r.at("to").get<int>();
+        if (pair.target < 0 || pair.target >= n || pair.source < 0 || pair.source >= n) {
+          throw std::runtime_error("registrations[" + std::to_string(k) + "]: from/to outside the bundle's " +
+                                   std::to_string(n) + " submaps (a report of another bundle?)");
+        }
+        add({pair}, horizontal ? best : depth_only, loop ? loops : adjacent);
+      }
+    } catch (const std::exception& e) {
+      throw std::runtime_error(report + ": " + e.what());
     }
   }
   const GraphSolution solution = optimize_pose_graph(dr, edges, config.graph);

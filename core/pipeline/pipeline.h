@@ -65,7 +65,9 @@ struct Constraint {
   int from = 0, to = 0;
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();  // `to` in the frame of `from`
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // registrations: overlap centroid, `to`'s frame
-  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();     // registrations: where they started
+  // Registrations: the predicted pose of `to` in `from` the pair was registered from (the
+  // feature-aided path starts GICP from RANSAC's estimate instead).
+  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
   Information6 information = Information6::Identity();
   RegistrationQuality quality;   // registrations only
   double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time
