@@ -10,11 +10,9 @@
 // key=value: pipeline parameters, e.g. graph.dr_sigma_yaw_rad=0.005.
 #include <cstdio>
 #include <exception>
-#include <fstream>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
+#include "bench/report_registrations.h"
 #include "core/eval/metrics.h"
 #include "core/io/bundle.h"
 #include "core/pipeline/pipeline.h"
@@ -45,12 +43,8 @@ int main(int argc, char** argv) try {
     dr.push_back(s.dr_pose);
     reference.push_back(*s.reference_pose);
   }
-  std::vector<PoseGraphEdge> edges;
-  const Information6 dr_information =
-      information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad);
-  for (std::size_t i = 1; i < dr.size(); ++i) {
-    edges.push_back({static_cast<int>(i - 1), static_cast<int>(i), dr[i - 1].inverse() * dr[i], dr_information});
-  }
+  std::vector<PoseGraphEdge> edges = odometry_edges(
+      dr, information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad));
   const Information6 best = information_from_sigmas(config.quality.best_sigma_translation_m,
                                                     config.quality.best_sigma_rotation_rad);
   Information6 depth_only = best;
@@ -66,28 +60,10 @@ int main(int argc, char** argv) try {
     add(adjacent_line_candidates(set, reference, config.candidates), best, adjacent);
     if (loops_on) add(loop_candidates(set, reference, config.candidates), best, loops);
   } else {
-    std::ifstream in(report);
-    if (!in) throw std::runtime_error(report + ": cannot be read");
-    try {
-      const nlohmann::json parsed = nlohmann::json::parse(in);
-      const nlohmann::json& registrations = parsed.at("registrations");
-      const int n = static_cast<int>(reference.size());
-      for (std::size_t k = 0; k < registrations.size(); ++k) {
-        const nlohmann::json& r = registrations[k];
-        if (!r.at("accepted").get<bool>()) continue;
-        const bool loop = r.at("type") == "loop";
-        const bool horizontal = loop || r.at("path") == "feature-aided";
-        CandidatePair pair;
-        pair.target = r.at("from").get<int>();
-        pair.source = r.at("to").get<int>();
-        if (pair.target < 0 || pair.target >= n || pair.source < 0 || pair.source >= n) {
-          throw std::runtime_error("registrations[" + std::to_string(k) + "]: from/to outside the bundle's " +
-                                   std::to_string(n) + " submaps (a report of another bundle?)");
-        }
-        add({pair}, horizontal ? best : depth_only, loop ? loops : adjacent);
-      }
-    } catch (const std::exception& e) {
-      throw std::runtime_error(report + ": " + e.what());
+    for (const bench::ReportRegistration& r : bench::read_report(report, static_cast<int>(dr.size())).registrations) {
+      if (!r.accepted) continue;
+      const bool loop = r.type == "loop";
+      add({CandidatePair{r.from, r.to}}, loop || r.path == "feature-aided" ? best : depth_only, loop ? loops : adjacent);
     }
   }
   const GraphSolution solution = optimize_pose_graph(dr, edges, config.graph);

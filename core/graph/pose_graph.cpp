@@ -71,6 +71,16 @@ Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
   return sigma.cwiseAbs2().cwiseInverse().asDiagonal();
 }
 
+std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& dead_reckoning,
+                                          const Information6& information) {
+  std::vector<PoseGraphEdge> edges;
+  for (std::size_t i = 1; i < dead_reckoning.size(); ++i) {
+    edges.push_back({static_cast<int>(i - 1), static_cast<int>(i), dead_reckoning[i - 1].inverse() * dead_reckoning[i],
+                     information});
+  }
+  return edges;
+}
+
 GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
                                   const std::vector<PoseGraphEdge>& edges, const GraphConfig& config) {
   std::vector<Eigen::Vector3d> positions(initial.size());

@@ -28,6 +28,11 @@ struct PoseGraphEdge {
 Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
                                      const Eigen::Vector3d& rotation_rad);
 
+// Edges between consecutive nodes carrying the relative pose dead reckoning gives (Table 1's
+// odometry constraints when `information` is the DR information).
+std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& dead_reckoning,
+                                          const Information6& information);
+
 struct GraphConfig {
   // Table 1 (c): DR noise, translation (5, 5, 1) m and rotation (1e-4, 1e-4, 1e-2) rad.
   Eigen::Vector3d dr_sigma_translation_m{5.0, 5.0, 1.0};

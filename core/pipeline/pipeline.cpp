@@ -303,12 +303,12 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   // Odometry edges: consecutive submaps, DR relative pose, Table 1's DR information.
   const Information6 dr_information =
       information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad);
-  for (std::size_t i = 1; i < r.dr_poses.size(); ++i) {
+  for (const PoseGraphEdge& e : odometry_edges(r.dr_poses, dr_information)) {
     Constraint c;
-    c.from = static_cast<int>(i - 1);
-    c.to = static_cast<int>(i);
-    c.measured = r.dr_poses[i - 1].inverse() * r.dr_poses[i];
-    c.information = dr_information;
+    c.from = e.from;
+    c.to = e.to;
+    c.measured = e.measured;
+    c.information = e.information;
     r.constraints.push_back(c);
   }
 

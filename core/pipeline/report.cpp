@@ -73,6 +73,15 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       if (!e) return nullptr;
       return {{"translation_m", e->translation_m}, {"horizontal_m", e->horizontal_m}, {"yaw_deg", e->yaw_deg}};
     };
+    // Enough to rebuild the edge without registering again (bench/regraph.cpp re-weighs them).
+    const Eigen::Quaterniond q(c.measured.rotation());
+    j["measured"] = {{"translation_m", {c.measured.translation().x(), c.measured.translation().y(), c.measured.translation().z()}},
+                     {"rotation_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+    j["anchor_m"] = {c.anchor.x(), c.anchor.y(), c.anchor.z()};
+    if (c.accepted) {
+      const Eigen::Matrix<double, 6, 1> d = c.information.diagonal();
+      j["information_diagonal"] = std::vector<double>(d.data(), d.data() + 6);
+    }
     if (nlohmann::json e = error_json(c.measured); !e.is_null()) {
       j["error_vs_reference"] = e;
       j["guess_error_vs_reference"] = error_json(c.guess);
