@@ -15,6 +15,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/grpcpp.h>
 
+#include "server/database_health.h"
 #include "server/log.h"
 #include "server/scheduler/scheduler.h"
 #include "server/services/job_service.h"
@@ -111,6 +112,7 @@ int serve(const ServeOptions& o) {
                               {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
                                .scratch = scratch});
   scheduler.start();
+  service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::thread stopper([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);

@@ -43,8 +43,8 @@ def psql(url, sql):
 class Server:
     """bathyslam-server on a database of its own, on a free port."""
 
-    def __init__(self):
-        pg_sh, cluster = ENV["PG_SH"], ENV["BATHYSLAM_TEST_PG"]
+    def __init__(self, cluster=None):
+        pg_sh, cluster = ENV["PG_SH"], cluster or ENV["BATHYSLAM_TEST_PG"]
         self.db = f"service_api_{os.getpid()}"
         self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
         self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
@@ -338,6 +338,44 @@ class ServiceApiTest(unittest.TestCase):
             self.watch(after.id, timeout=0.3)
         self.assertEqual(raised.exception.code(), grpc.StatusCode.DEADLINE_EXCEEDED)
         self.assertEqual(self.watch(after.id)[-1].state, job_pb2.SUCCEEDED)
+
+
+class DatabaseOutageTest(unittest.TestCase):
+    """Health follows the database: a cluster of this test's own is stopped and started again."""
+
+    def setUp(self):
+        self.cluster = os.path.join(tempfile.mkdtemp(prefix="bathyslam-outage-"), "pg")
+        subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
+        self.server = Server(self.cluster)
+        self.health = health_pb2_grpc.HealthStub(self.server.channel)
+
+    def tearDown(self):
+        subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
+        self.server.stop()
+        subprocess.run(["bash", ENV["PG_SH"], "destroy", self.cluster], check=True, capture_output=True)
+
+    def wait_for(self, status, seconds=15):
+        deadline = time.monotonic() + seconds
+        while True:
+            reply = self.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
+            if reply.status == status or time.monotonic() > deadline:
+                return reply.status
+            time.sleep(0.2)
+
+    def test_health_is_not_serving_while_the_database_is_down(self):
+        serving, not_serving = health_pb2.HealthCheckResponse.SERVING, health_pb2.HealthCheckResponse.NOT_SERVING
+        self.assertEqual(self.wait_for(serving), serving)
+        subprocess.run(["bash", ENV["PG_SH"], "stop", self.cluster], check=True, capture_output=True)
+        self.assertEqual(self.wait_for(not_serving), not_serving, self.server.server_log())
+        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
+        with self.assertRaises(grpc.RpcError) as raised:
+            jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.UNAVAILABLE, raised.exception.details())
+        self.assertIn("database", raised.exception.details())
+        subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
+        self.assertEqual(self.wait_for(serving), serving, self.server.server_log())
+        self.assertIn("database unreachable", self.server.server_log())
+        jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)  # the pool reconnects
 
 
 if __name__ == "__main__":
