@@ -126,6 +126,19 @@ void Scheduler::work(const std::string& worker) {
   }
 }
 
+// Gives the job back to the queue, so that another server (or this one, restarted) runs it now
+// rather than when the lease would have expired.
+void Scheduler::release(const storage::Lease& lease, double seconds) {
+  const long long id = lease.job_id;
+  try {
+    if (jobs_.release(lease)) log("job %lld: stopped after %.1f s with the server; given back to the queue", id, seconds);
+    else log("job %lld: stopped after %.1f s with the server; no longer ours", id, seconds);
+  } catch (const std::exception& error) {
+    log("job %lld: stopped after %.1f s with the server; could not give it back (%s), its lease will expire", id,
+        seconds, error.what());
+  }
+}
+
 void Scheduler::run(const storage::ClaimedJob& job) {
   const storage::Lease& lease = job.lease;
   const long long id = lease.job_id;
@@ -189,10 +202,15 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     if (jobs_.succeed(lease)) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
   } catch (const Cancelled&) {
-    log("job %lld: stopped after %.1f s (%s)", id, seconds_since(start),
-        stopping_ ? "server stopping; the lease will expire and the job run again" : "cancelled or no longer ours");
+    if (stopping_) {
+      release(lease, seconds_since(start));
+    } else {
+      log("job %lld: stopped after %.1f s (cancelled or no longer ours)", id, seconds_since(start));
+    }
   } catch (const std::exception& error) {
-    if (cancel) {
+    if (stopping_) {
+      release(lease, seconds_since(start));
+    } else if (cancel) {
       log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
     } else {
       log("job %lld: failed after %.1f s: %s", id, seconds_since(start), error.what());

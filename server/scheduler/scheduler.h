@@ -34,13 +34,14 @@ class Scheduler {
   Scheduler& operator=(const Scheduler&) = delete;
 
   void start();
-  // Stops claiming and interrupts running jobs; their leases expire and another server (or
-  // this one, restarted) runs them again.
+  // Stops claiming and interrupts running jobs, which go back to the queue for another server
+  // (or this one, restarted) to run again.
   void stop();
 
  private:
   void work(const std::string& worker);
   void run(const storage::ClaimedJob& job);
+  void release(const storage::Lease& lease, double seconds);
 
   storage::SurveyStore& surveys_;
   storage::JobQueue& jobs_;

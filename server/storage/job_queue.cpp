@@ -144,30 +144,51 @@ bool JobQueue::cancel(std::int64_t job_id) {
              .affected() == 1;
 }
 
-int JobQueue::reap() {
-  auto connection = pool_.acquire();
-  // One statement, so the state change and its event commit together. SKIP LOCKED: a row that
-  // a heartbeat is renewing right now is not expired after all.
-  Result reaped = connection->exec(
-      "WITH reaped AS ("
+namespace {
+
+// Running jobs chosen by `where` go back to the queue while they have attempts left and fail
+// otherwise, with an event `stage` saying `what` happened (a format() of the row's worker).
+// One statement, so the state change and its event commit together. Returns how many jobs it
+// touched, and notifies waiting workers when one was re-queued.
+int requeue_or_fail(Connection& connection, std::string_view where, std::string_view stage, std::string_view what,
+                    const std::vector<Param>& params) {
+  const std::string said = "format('" + std::string(what) + "', worker)";
+  Result changed = connection.exec(
+      "WITH changed AS ("
       "  UPDATE jobs SET"
       "   state = CASE WHEN attempts >= max_attempts THEN 'failed' ELSE 'queued' END,"
-      "   error = CASE WHEN attempts >= max_attempts THEN format("
-      "     'lease of worker %s expired on attempt %s of %s; giving up', worker, attempts, max_attempts)"
-      "     ELSE error END,"
+      "   error = CASE WHEN attempts >= max_attempts THEN format('%s on attempt %s of %s; giving up', " + said +
+          ", attempts, max_attempts) ELSE error END,"
       "   finished_at = CASE WHEN attempts >= max_attempts THEN now() END,"
       "   lease_expires_at = NULL"
-      "  WHERE id IN (SELECT id FROM jobs WHERE state = 'running' AND lease_expires_at < now()"
-      "               FOR UPDATE SKIP LOCKED)"
-      "  RETURNING id, attempts, state, worker"
-      "), logged AS ("
-      "  INSERT INTO job_events (job_id, attempt, stage, progress, message)"
-      "  SELECT id, attempts, 'lease-expired', 0, format('worker %s stopped renewing its lease; %s', worker,"
-      "         CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM reaped"
-      ")"
-      " SELECT count(*), count(*) FILTER (WHERE state = 'queued') FROM reaped");
-  if (reaped.int64(0, 1) > 0) connection->exec("SELECT pg_notify($1, '')", {kChannel});
-  return static_cast<int>(reaped.int64(0, 0));
+      "  WHERE " + std::string(where) +
+          "  RETURNING id, attempts, state, worker"
+          "), logged AS ("
+          "  INSERT INTO job_events (job_id, attempt, stage, progress, message)"
+          "  SELECT id, attempts, '" + std::string(stage) + "', 0, format('%s; %s', " + said +
+          ", CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM changed"
+          ")"
+          " SELECT count(*), count(*) FILTER (WHERE state = 'queued') FROM changed",
+      params);
+  if (changed.int64(0, 1) > 0) connection.exec("SELECT pg_notify($1, '')", {kChannel});
+  return static_cast<int>(changed.int64(0, 0));
+}
+
+}  // namespace
+
+int JobQueue::reap() {
+  auto connection = pool_.acquire();
+  // SKIP LOCKED: a row that a heartbeat is renewing right now is not expired after all.
+  return requeue_or_fail(*connection,
+                         "id IN (SELECT id FROM jobs WHERE state = 'running' AND lease_expires_at < now()"
+                         " FOR UPDATE SKIP LOCKED)",
+                         "lease-expired", "lease of worker %s expired", {});
+}
+
+bool JobQueue::release(const Lease& lease) {
+  auto connection = pool_.acquire();
+  return requeue_or_fail(*connection, kLeaseHeld, "released", "worker %s stopped with its server",
+                         {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 
 bool JobQueue::record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message) {

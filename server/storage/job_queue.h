@@ -112,6 +112,10 @@ class JobQueue {
   // Jobs whose lease has expired: re-queued while they have attempts left, else failed with the
   // reason. Returns how many jobs it touched.
   int reap();
+  // A worker whose server is stopping gives its job back at once instead of letting the lease
+  // run out: re-queued while it has attempts left, else failed, as reap() would. False when the
+  // lease was no longer this worker's.
+  bool release(const Lease& lease);
 
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
   std::vector<JobEvent> events(std::int64_t job_id);

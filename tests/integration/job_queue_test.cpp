@@ -117,6 +117,36 @@ TEST(JobQueue, AJobFailsWithTheReasonOnceItsAttemptsAreUsedUp) {
   EXPECT_EQ(*status.error, "lease of worker second expired on attempt 2 of 2; giving up");
 }
 
+TEST(JobQueue, AJobGivenBackByAStoppingServerIsClaimedAtOnce) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 2);
+  JobQueue queue(pool, {.lease = 30s, .poll = 20s});
+  const std::int64_t id = queue.enqueue({a_survey(pool), "gicp", {}, 2});
+  std::optional<ClaimedJob> stopped = queue.claim("stopping");
+  ASSERT_TRUE(stopped);
+  EXPECT_TRUE(queue.release(stopped->lease));
+  EXPECT_FALSE(queue.release(stopped->lease));  // no longer its job
+  EXPECT_FALSE(queue.heartbeat(stopped->lease));
+
+  // Long before the 30 s lease would have run out, and woken by NOTIFY rather than the poll.
+  const auto begin = Clock::now();
+  std::optional<ClaimedJob> job = queue.wait_for_job("next", 5s);
+  ASSERT_TRUE(job);
+  EXPECT_LT(Clock::now() - begin, 2s);
+  EXPECT_EQ(job->lease.job_id, id);
+  EXPECT_EQ(job->lease.attempt, 2);
+  std::vector<JobEvent> events = queue.events(id);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].stage, "released");
+  EXPECT_EQ(events[0].message, "worker stopping stopped with its server; re-queued");
+
+  // Given back on its last attempt, it fails with the reason instead of looping.
+  EXPECT_TRUE(queue.release(job->lease));
+  const JobStatus status = queue.status(id);
+  EXPECT_EQ(status.state, JobState::kFailed);
+  EXPECT_EQ(status.error, "worker next stopped with its server on attempt 2 of 2; giving up");
+}
+
 TEST(JobQueue, HeartbeatsKeepALeaseAlivePastItsFirstExpiry) {
   testing::FreshDatabase db;
   ConnectionPool pool(db.conninfo(), 2);

@@ -42,14 +42,20 @@ def psql(url, sql):
 
 class Server:
     """bathyslam-server on a database of its own, on a free port."""
+    count = 0
 
     def __init__(self, cluster=None):
         pg_sh, cluster = ENV["PG_SH"], cluster or ENV["BATHYSLAM_TEST_PG"]
-        self.db = f"service_api_{os.getpid()}"
+        Server.count += 1
+        self.db = f"service_api_{os.getpid()}_{Server.count}"
         self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
         self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
         psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
-        self.log = open(os.path.join(STUBS, "server.log"), "w+")
+        self.log = open(os.path.join(STUBS, f"{self.db}.log"), "w+")
+        self.start()
+
+    def start(self):
+        """A server process on this database (again, after halt())."""
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
                                          "--workers", "1", "--dev-tenant", "python"], stdout=subprocess.PIPE, stderr=self.log, text=True)
         line = self.process.stdout.readline()
@@ -63,10 +69,15 @@ class Server:
         self.log.seek(0)
         return self.log.read()
 
-    def stop(self):
+    def halt(self):
+        """SIGTERM, as an operator stops a server; the database stays."""
         self.channel.close()
         self.process.terminate()
         self.process.wait(timeout=30)
+        self.process.stdout.close()
+
+    def stop(self):
+        self.halt()
         psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
 
 
@@ -90,6 +101,16 @@ def upload_requests(survey_id, name, data, start=0, sha=None, cut_after=None):
         sent += 1
 
 
+def ready_survey(surveys, name):
+    """A survey made of the `small` bundle, uploaded and finalized."""
+    survey_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name=name, crs="EPSG:32651"), timeout=30).id
+    for f in FILES:
+        assert surveys.UploadFile(upload_requests(survey_id, f, read(f)), timeout=120).complete, f
+    survey = surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=120)
+    assert survey.state == survey_pb2.Survey.READY, survey
+    return survey_id
+
+
 class ServiceApiTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -111,12 +132,7 @@ class ServiceApiTest(unittest.TestCase):
         return self.surveys.UploadFile(upload_requests(survey_id, name, data, **kwargs), timeout=120)
 
     def ready_survey(self, name):
-        survey_id = self.create(name)
-        for f in FILES:
-            self.assertTrue(self.upload(survey_id, f, read(f)).complete)
-        survey = self.surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=120)
-        self.assertEqual(survey.state, survey_pb2.Survey.READY)
-        return survey_id
+        return ready_survey(self.surveys, name)
 
     def watch(self, job_id, until=None, timeout=120):
         events = []
@@ -338,6 +354,38 @@ class ServiceApiTest(unittest.TestCase):
             self.watch(after.id, timeout=0.3)
         self.assertEqual(raised.exception.code(), grpc.StatusCode.DEADLINE_EXCEEDED)
         self.assertEqual(self.watch(after.id)[-1].state, job_pb2.SUCCEEDED)
+
+
+class ServerStopTest(unittest.TestCase):
+    """A job running when its server is stopped goes back to the queue at once and runs again."""
+
+    def setUp(self):
+        self.server = Server()
+
+    def tearDown(self):
+        self.server.stop()
+
+    def test_a_running_job_is_given_back_when_its_server_stops(self):
+        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
+        survey_id = ready_survey(survey_pb2_grpc.SurveyServiceStub(self.server.channel), "stop")
+        job = jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp",
+                                                      parameters={"threads": "1"}), timeout=30)
+        for event in jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
+            if event.stage == "register":
+                break
+        self.server.halt()
+        # Without the give-back the job would sit 'running' until its 30 s lease ran out.
+        state = psql(self.server.url, f"SELECT state || ' ' || attempts FROM jobs WHERE id = {job.id}")
+        self.assertEqual(state, "queued 1", self.server.server_log())
+        self.assertIn("given back to the queue", self.server.server_log())
+
+        self.server.start()
+        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
+        events = list(jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120))
+        self.assertEqual(events[-1].state, job_pb2.SUCCEEDED, self.server.server_log())
+        stages = psql(self.server.url, f"SELECT string_agg(stage, ' ' ORDER BY id) FROM job_events WHERE job_id = {job.id}")
+        self.assertIn("register released load", stages)
+        self.assertEqual(jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
 
 
 class DatabaseOutageTest(unittest.TestCase):
