@@ -17,7 +17,7 @@ struct InspectOptions {
 void run_inspect(const InspectOptions& o) {
   BundleReadResult result = read_bundle(o.bundle);
   for (const Problem& p : result.problems) {
-    std::fprintf(stderr, "%s/%s\n", o.bundle.c_str(), p.to_string().c_str());
+    std::fprintf(stderr, "%s%s%s\n", o.bundle.c_str(), p.file.empty() ? "" : "/", p.to_string().c_str());
   }
   if (!result.survey) throw std::runtime_error(o.bundle + ": not a valid survey bundle");
   const SurveySummary summary = summarize(*result.survey);
@@ -33,7 +33,7 @@ void run_inspect(const InspectOptions& o) {
 void add_inspect_command(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
   CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey bundle and summarise it");
-  cmd->add_option("bundle", options->bundle, "survey bundle folder")->required();
+  cmd->add_option("bundle", options->bundle, "survey bundle: a folder or a .tar of one")->required();
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->callback([options] { run_inspect(*options); });
 }

@@ -95,7 +95,7 @@ void run_process(const ProcessOptions& o) {
 void add_process_command(CLI::App& app) {
   auto options = std::make_shared<ProcessOptions>();
   CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey bundle offline");
-  cmd->add_option("bundle", options->bundle, "survey bundle folder")->required();
+  cmd->add_option("bundle", options->bundle, "survey bundle: a folder or a .tar of one")->required();
   cmd->add_option("--config", options->config, "odometry, gicp or mchs")
       ->check(CLI::IsMember({"odometry", "gicp", "mchs"}))
       ->capture_default_str();

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +15,7 @@
 #include "client/commands.h"
 #include "client/remote.h"
 #include "core/io/bundle.h"
+#include "core/io/bundle_files.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -29,25 +29,25 @@ struct UploadOptions {
   std::int64_t stop_after_bytes = 0;  // > 0: stop there, as a cut connection would (to test resuming)
 };
 
-std::string file_sha256(const std::filesystem::path& path) {
+std::string file_sha256(const BundleFiles& files, std::string_view file) {
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), &EVP_MD_CTX_free);
   EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr);
-  std::ifstream in(path, std::ios::binary);
+  const std::unique_ptr<ByteSource> in = files.open(file);
   std::vector<char> buffer(4 << 20);
-  while (in.read(buffer.data(), static_cast<std::streamsize>(buffer.size())) || in.gcount() > 0)
-    EVP_DigestUpdate(context.get(), buffer.data(), static_cast<std::size_t>(in.gcount()));
+  while (const std::size_t n = in->read(buffer.data(), buffer.size())) EVP_DigestUpdate(context.get(), buffer.data(), n);
   std::array<unsigned char, 32> digest{};
   unsigned int length = 0;
   EVP_DigestFinal_ex(context.get(), digest.data(), &length);
   return std::string(digest.begin(), digest.end());
 }
 
-std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, bool& ready) {
-  std::ifstream in(std::filesystem::path(o.bundle) / kSurveyJsonFile);
-  const nlohmann::json meta = nlohmann::json::parse(in, nullptr, false);
+std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, const BundleFiles& files,
+                                   bool& ready) {
+  if (!files.contains(kSurveyJsonFile)) throw std::runtime_error(o.bundle + ": no survey.json");
+  const nlohmann::json meta = nlohmann::json::parse(read_all(*files.open(kSurveyJsonFile)), nullptr, false);
   if (meta.is_discarded() || !meta.is_object())
     throw std::runtime_error(o.bundle + "/survey.json: not a JSON object (bathyslam inspect tells more)");
-  const std::string name = !o.name.empty() ? o.name : meta.value("name", std::filesystem::path(o.bundle).filename().string());
+  const std::string name = !o.name.empty() ? o.name : meta.value("name", std::filesystem::path(o.bundle).stem().string());
   v1::ListSurveysRequest list;
   list.set_name(name);
   v1::ListSurveysResponse found;
@@ -71,10 +71,10 @@ std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const Uploa
 
 // Uploads one file from the committed size on; false when stopped by --stop-after-bytes.
 bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t survey_id,
-                 const std::filesystem::path& path, std::int64_t& budget) {
-  const std::string name = path.filename().string();
-  const auto size = static_cast<std::int64_t>(std::filesystem::file_size(path));
-  const std::string digest = file_sha256(path);
+                 const BundleFiles& files, std::string_view file, std::int64_t& budget) {
+  const std::string name(file);
+  const auto size = static_cast<std::int64_t>(files.size(file));
+  const std::string digest = file_sha256(files, file);
 
   v1::GetUploadStatusRequest ask;
   ask.set_survey_id(survey_id);
@@ -97,8 +97,7 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
   auto context = o.remote.context();
   v1::UploadStatus reply;
   auto writer = surveys.UploadFile(context.get(), &reply);
-  std::ifstream in(path, std::ios::binary);
-  in.seekg(offset);
+  const std::unique_ptr<ByteSource> in = files.open(file, static_cast<std::uint64_t>(offset));
   v1::UploadFileRequest message;
   message.set_survey_id(survey_id);
   message.set_file_name(name);
@@ -112,7 +111,7 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
     std::size_t want = static_cast<std::size_t>(std::min<std::int64_t>(kChunkBytes, size - offset));
     if (o.stop_after_bytes > 0) want = static_cast<std::size_t>(std::min<std::int64_t>(want, budget));
     if (!first_message && want == 0) break;  // --stop-after-bytes used up
-    in.read(buffer.data(), static_cast<std::streamsize>(want));
+    if (read_fully(*in, buffer.data(), want) != want) throw std::runtime_error(name + ": shorter than " + std::to_string(size) + " bytes");
     message.set_offset(offset);
     message.set_data(buffer.data(), want);
     if (!writer->Write(message)) break;  // the server ended the call; Finish says why
@@ -142,14 +141,14 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
 void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
+  const BundleFiles files(o.bundle);
   bool ready = false;
-  const std::int64_t id = find_or_create_survey(*surveys, o, ready);
+  const std::int64_t id = find_or_create_survey(*surveys, o, files, ready);
   if (!ready) {
     std::int64_t budget = o.stop_after_bytes;
     for (std::string_view file : {kSurveyJsonFile, kNavFile, kPingsFile, kReferenceNavFile}) {
-      const std::filesystem::path path = std::filesystem::path(o.bundle) / file;
-      if (!std::filesystem::exists(path)) continue;
-      if (!upload_file(*surveys, o, id, path, budget)) throw std::runtime_error("upload interrupted (--stop-after-bytes)");
+      if (!files.contains(file)) continue;
+      if (!upload_file(*surveys, o, id, files, file, budget)) throw std::runtime_error("upload interrupted (--stop-after-bytes)");
     }
     v1::FinalizeSurveyRequest finalize;
     finalize.set_survey_id(id);
@@ -164,7 +163,7 @@ void run_upload(const UploadOptions& o) {
 void add_upload_command(CLI::App& app) {
   auto o = std::make_shared<UploadOptions>();
   CLI::App* cmd = app.add_subcommand("upload", "Upload a survey bundle (resumes an interrupted upload) and finalize it");
-  cmd->add_option("bundle", o->bundle, "survey bundle folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("bundle", o->bundle, "survey bundle: a folder or a .tar of one")->required()->check(CLI::ExistingPath);
   cmd->add_option("--name", o->name, "survey name (default: survey.json's name)");
   cmd->add_option("--stop-after-bytes", o->stop_after_bytes, "stop after sending this many bytes, as a cut connection would");
   add_remote_options(cmd, o->remote);

@@ -1,6 +1,6 @@
 #pragma once
-// The survey bundle (design.md, "Survey bundle"): a folder with survey.json, nav.csv,
-// pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
+// The survey bundle (design.md, "Survey bundle"): a folder, or a .tar of one, with survey.json,
+// nav.csv, pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
 // only when there is no error; every problem names its file, line and field.
 #include <filesystem>
 #include <optional>
@@ -48,7 +48,7 @@ struct BundleReadResult {
   std::vector<Problem> problems;  // errors and warnings, in file order
 };
 
-BundleReadResult read_bundle(const std::filesystem::path& dir);
+BundleReadResult read_bundle(const std::filesystem::path& bundle);  // a folder or a tar
 
 class BundleError : public std::runtime_error {
  public:
@@ -60,7 +60,7 @@ class BundleError : public std::runtime_error {
 };
 
 // read_bundle for callers that want the survey or an exception listing every error.
-Survey load_bundle(const std::filesystem::path& dir);
+Survey load_bundle(const std::filesystem::path& bundle);
 
 // Writes `survey` as a bundle into `dir` (created if needed). Each file is written under a
 // temporary name and renamed, so a reader never sees half a file. Numbers are written in their

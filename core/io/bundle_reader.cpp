@@ -7,6 +7,8 @@
 #include <string>
 
 #include "core/io/bundle.h"
+
+#include "core/io/bundle_files.h"
 #include "core/io/crs.h"
 #include "core/io/csv.h"
 
@@ -239,17 +241,24 @@ void parse_pings_csv(ByteSource& source, std::string_view file,
   }
 }
 
-BundleReadResult read_bundle(const std::filesystem::path& dir) {
+BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   ProblemList problems;
   Survey survey;
-  auto open = [&](std::string_view file, bool required) -> std::unique_ptr<FileSource> {
-    const auto path = dir / file;
-    if (!std::filesystem::exists(path)) {
-      if (required) problems.error(std::string(file), 0, "", "missing from " + dir.string());
+  std::optional<BundleFiles> files;
+  try {
+    files.emplace(bundle);
+  } catch (const std::exception& e) {
+    const std::string what = e.what(), prefix = bundle.string() + ": ";
+    problems.error("", 0, "", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);  // the bundle itself
+  }
+  auto open = [&](std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
+    if (!files) return nullptr;
+    if (!files->contains(file)) {
+      if (required) problems.error(std::string(file), 0, "", "missing from " + files->name());
       return nullptr;
     }
     try {
-      return std::make_unique<FileSource>(path);
+      return files->open(file);
     } catch (const std::exception& e) {
       problems.error(std::string(file), 0, "", e.what());
       return nullptr;
@@ -290,8 +299,8 @@ std::string describe_errors(const std::vector<Problem>& problems) {
 BundleError::BundleError(std::vector<Problem> problems)
     : std::runtime_error(describe_errors(problems)), problems_(std::move(problems)) {}
 
-Survey load_bundle(const std::filesystem::path& dir) {
-  BundleReadResult result = read_bundle(dir);
+Survey load_bundle(const std::filesystem::path& bundle) {
+  BundleReadResult result = read_bundle(bundle);
   if (!result.survey) throw BundleError(std::move(result.problems));
   return std::move(*result.survey);
 }

@@ -7,10 +7,15 @@
 
 namespace bathyslam {
 
-FileSource::FileSource(const std::filesystem::path& path)
+FileSource::FileSource(const std::filesystem::path& path, std::uint64_t offset)
     : file_(std::fopen(path.c_str(), "rb")) {
   if (file_ == nullptr) {
     throw std::runtime_error(path.string() + ": cannot open: " + std::strerror(errno));
+  }
+  if (offset > 0 && std::fseek(file_, static_cast<long>(offset), SEEK_SET) != 0) {
+    const std::string why = std::strerror(errno);
+    std::fclose(file_);
+    throw std::runtime_error(path.string() + ": cannot seek to " + std::to_string(offset) + ": " + why);
   }
 }
 
@@ -25,6 +30,16 @@ std::size_t MemorySource::read(char* buffer, std::size_t size) {
   std::memcpy(buffer, bytes_.data(), n);
   bytes_.remove_prefix(n);
   return n;
+}
+
+std::size_t read_fully(ByteSource& source, char* buffer, std::size_t size) {
+  std::size_t done = 0;
+  while (done < size) {
+    const std::size_t n = source.read(buffer + done, size - done);
+    if (n == 0) break;
+    done += n;
+  }
+  return done;
 }
 
 std::string read_all(ByteSource& source) {

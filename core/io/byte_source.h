@@ -2,6 +2,7 @@
 // Where the bytes of an input file come from: a file on disk, or bytes already in memory
 // (an upload held by the server). Parsers read through this so they never care which.
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -18,8 +19,8 @@ class ByteSource {
 
 class FileSource : public ByteSource {
  public:
-  // Throws std::runtime_error naming the file when it cannot be opened.
-  explicit FileSource(const std::filesystem::path& path);
+  // Reads from `offset` on. Throws std::runtime_error naming the file when it cannot be opened.
+  explicit FileSource(const std::filesystem::path& path, std::uint64_t offset = 0);
   ~FileSource() override;
   FileSource(const FileSource&) = delete;
   FileSource& operator=(const FileSource&) = delete;
@@ -37,6 +38,9 @@ class MemorySource : public ByteSource {
  private:
   std::string_view bytes_;
 };
+
+// Reads until `size` bytes or the end; returns how many (a source may return fewer per call).
+std::size_t read_fully(ByteSource& source, char* buffer, std::size_t size);
 
 // Reads a whole source into a string (for small files such as survey.json).
 std::string read_all(ByteSource& source);

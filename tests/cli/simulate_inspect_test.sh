@@ -19,6 +19,18 @@ assert j["counts"]["soundings"] == 512 * j["counts"]["pings"], j["counts"]
 assert j["drift"]["end_m"] > 0, j["drift"]
 PY
 
+# A .tar of the bundle folder reads as the folder does, in place; a tar that is not one bundle
+# is refused with the reason.
+tar -cf "$work/s.tar" -C "$work" s
+"$BATHYSLAM" inspect "$work/s.tar" > "$work/inspect_tar.txt"
+diff "$work/inspect.txt" "$work/inspect_tar.txt"
+tar -cf "$work/nojson.tar" -C "$work" --exclude survey.json s
+if "$BATHYSLAM" inspect "$work/nojson.tar" 2> "$work/err.txt"; then echo "inspect accepted a tar without survey.json" >&2; exit 1; fi
+grep -q "nojson.tar: the tar holds no survey.json" "$work/err.txt"
+echo "not a tar" > "$work/text.tar"
+if "$BATHYSLAM" inspect "$work/text.tar" 2> "$work/err.txt"; then echo "inspect accepted a text file" >&2; exit 1; fi
+grep -q "text.tar: neither a folder nor a tar" "$work/err.txt"
+
 # A bundle with a broken line: a non-zero exit and a message naming file, line and field.
 sed -i '5s/^\([^,]*\),[^,]*,/\1,oops,/' "$work/s/nav.csv"
 if "$BATHYSLAM" inspect "$work/s" 2> "$work/err.txt"; then
@@ -26,6 +38,9 @@ if "$BATHYSLAM" inspect "$work/s" 2> "$work/err.txt"; then
   exit 1
 fi
 grep -q "nav.csv:5: easting: not a number: 'oops'" "$work/err.txt"
+tar -cf "$work/broken.tar" -C "$work" s
+if "$BATHYSLAM" inspect "$work/broken.tar" 2> "$work/err.txt"; then echo "inspect accepted a broken tar" >&2; exit 1; fi
+grep -q "broken.tar/nav.csv:5: easting: not a number: 'oops'" "$work/err.txt"
 echo "cli: simulate and inspect ok"
 
 # Offline processing: odometry keeps dead reckoning, so its trajectory error is the DR error.

@@ -23,6 +23,15 @@ grep -q "nav.csv *uploaded already" "$work/up2.err" || fail "re-sent nav.csv: $(
 survey=$(awk '/^survey .* ready$/ {print $2}' "$work/up2")
 [ -n "$survey" ] || fail "no survey id in: $(cat "$work/up2")"
 
+# A .tar of the bundle uploads as the folder does, cut and resumed inside pings.csv too.
+tar -cf "$work/small.tar" -C "$(dirname "$SMALL_BUNDLE")" "$(basename "$SMALL_BUNDLE")"
+if "$BATHYSLAM" upload "$work/small.tar" --name from-tar --stop-after-bytes 2000000 > /dev/null 2> "$work/tar1.err"; then
+  fail "a cut tar upload reported success"
+fi
+"$BATHYSLAM" upload "$work/small.tar" --name from-tar > "$work/tar2" 2> "$work/tar2.err" || fail "tar upload: $(cat "$work/tar2.err")"
+grep -q "resuming pings.csv at" "$work/tar2.err" || fail "tar upload did not resume: $(cat "$work/tar2.err")"
+grep -Eq "^survey [0-9]+ ready$" "$work/tar2" || fail "$(cat "$work/tar2")"
+
 if "$BATHYSLAM" submit "$survey" --config gicp --set gicp.max_iterations=0 2> "$work/bad.err"; then
   fail "an out-of-range parameter was accepted"
 fi
