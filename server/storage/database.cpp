@@ -112,7 +112,20 @@ std::optional<std::string> Result::optional_text(int row, int column) const {
   return std::string(text(row, column));
 }
 
-Connection::Connection(const std::string& conninfo) : conn_(PQconnectdb(conninfo.c_str()), &PQfinish) {
+namespace {
+
+// A connection string with a default connect_timeout of 10 s, which the string's own overrides:
+// without one, a database host that drops packets holds a worker, or the health probe, for
+// minutes of TCP retries.
+PGconn* connect_with_timeout(const std::string& conninfo) {
+  const char* keywords[] = {"connect_timeout", "dbname", nullptr};
+  const char* values[] = {"10", conninfo.c_str(), nullptr};
+  return PQconnectdbParams(keywords, values, /*expand_dbname=*/1);
+}
+
+}  // namespace
+
+Connection::Connection(const std::string& conninfo) : conn_(connect_with_timeout(conninfo), &PQfinish) {
   if (!conn_ || PQstatus(conn_.get()) != CONNECTION_OK) throw connection_error(conn_.get());
   // Server notices (e.g. "relation already exists, skipping") are not errors; keep stderr clean.
   PQsetNoticeProcessor(conn_.get(), [](void*, const char*) {}, nullptr);
