@@ -17,7 +17,8 @@ struct InspectOptions {
 void run_inspect(const InspectOptions& o) {
   BundleReadResult result = read_bundle(o.bundle);
   for (const Problem& p : result.problems) {
-    std::fprintf(stderr, "%s%s%s\n", o.bundle.c_str(), p.file.empty() ? "" : "/", p.to_string().c_str());
+    if (p.file.empty()) std::fprintf(stderr, "%s\n", p.to_string().c_str());
+    else std::fprintf(stderr, "%s/%s\n", o.bundle.c_str(), p.to_string().c_str());
   }
   if (!result.survey) throw std::runtime_error(o.bundle + ": not a valid survey bundle");
   const SurveySummary summary = summarize(*result.survey);

@@ -41,13 +41,18 @@ std::string file_sha256(const BundleFiles& files, std::string_view file) {
   return std::string(digest.begin(), digest.end());
 }
 
+// The survey's name when survey.json has none: the folder's, or the tar's without ".tar".
+std::string default_name(const std::filesystem::path& bundle) {
+  return std::filesystem::is_directory(bundle) ? bundle.filename().string() : bundle.stem().string();
+}
+
 std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, const BundleFiles& files,
                                    bool& ready) {
   if (!files.contains(kSurveyJsonFile)) throw std::runtime_error(o.bundle + ": no survey.json");
   const nlohmann::json meta = nlohmann::json::parse(read_all(*files.open(kSurveyJsonFile)), nullptr, false);
   if (meta.is_discarded() || !meta.is_object())
     throw std::runtime_error(o.bundle + "/survey.json: not a JSON object (bathyslam inspect tells more)");
-  const std::string name = !o.name.empty() ? o.name : meta.value("name", std::filesystem::path(o.bundle).stem().string());
+  const std::string name = !o.name.empty() ? o.name : meta.value("name", default_name(o.bundle));
   v1::ListSurveysRequest list;
   list.set_name(name);
   v1::ListSurveysResponse found;

@@ -1,5 +1,6 @@
 #include "core/io/bundle_files.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -35,7 +36,13 @@ std::string folder_of_survey_json(const std::filesystem::path& tar) {
   std::vector<std::string> found;
   for (char** e = entries; *e != nullptr; ++e) {
     const std::filesystem::path entry(*e);
-    if (entry.filename() == "survey.json") found.push_back(entry.parent_path().string());
+    if (entry.filename() != "survey.json") continue;
+    // GDAL lists pax extended headers (GNU tar --format=pax, macOS tars with attributes) as
+    // files of their own, "PaxHeaders.N/survey.json"; they are not the bundle's.
+    const bool pax_header = std::any_of(entry.begin(), entry.end(), [](const std::filesystem::path& part) {
+      return part.string().rfind("PaxHeader", 0) == 0;
+    });
+    if (!pax_header) found.push_back(entry.parent_path().string());
   }
   CSLDestroy(entries);
   if (found.empty()) throw std::runtime_error(tar.string() + ": the tar holds no survey.json");

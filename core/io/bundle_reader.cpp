@@ -248,8 +248,7 @@ BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   try {
     files.emplace(bundle);
   } catch (const std::exception& e) {
-    const std::string what = e.what(), prefix = bundle.string() + ": ";
-    problems.error("", 0, "", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);  // the bundle itself
+    problems.error("", 0, "", e.what());  // the bundle itself; the message names it
   }
   auto open = [&](std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
     if (!files) return nullptr;

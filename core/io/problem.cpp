@@ -7,7 +7,7 @@ namespace bathyslam {
 std::string Problem::to_string() const {
   std::string out = file;
   if (line > 0) out += ":" + std::to_string(line);
-  out += ": ";
+  if (!out.empty()) out += ": ";
   if (severity == Severity::kWarning) out += "warning: ";
   if (!field.empty()) out += field + ": ";
   out += message;

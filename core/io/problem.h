@@ -9,7 +9,7 @@ namespace bathyslam {
 struct Problem {
   enum class Severity { kError, kWarning };
   Severity severity = Severity::kError;
-  std::string file;      // empty when the bundle as a whole is at fault (not a folder or a tar)
+  std::string file;      // empty when the bundle as a whole is at fault; the message names it
   std::size_t line = 0;  // 1-based; 0 when the problem is about the whole file
   std::string field;     // column or JSON key; empty when the whole line or file is at fault
   std::string message;

@@ -182,6 +182,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       save();
     };
     store("submaps", [&] {
+      results_.discard(id);  // whatever an earlier attempt stored before it was stopped
       results_.save_origin(id, result.submaps.origin);
       results_.save_submaps(id, result.submaps.submaps);
     });

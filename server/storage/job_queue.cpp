@@ -146,20 +146,23 @@ bool JobQueue::cancel(std::int64_t job_id) {
 
 namespace {
 
-// Running jobs chosen by `where` go back to the queue while they have attempts left and fail
-// otherwise, with an event `stage` saying `what` happened (a format() of the row's worker).
+// Running jobs chosen by `where` go back to the queue while `attempts_allowed` (an expression
+// over the row, which becomes its max_attempts) is not used up and fail otherwise, with an event
+// `stage` saying `what` happened (a format() of the row's worker).
 // One statement, so the state change and its event commit together. Returns how many jobs it
 // touched, and notifies waiting workers when one was re-queued.
 int requeue_or_fail(Connection& connection, std::string_view where, std::string_view stage, std::string_view what,
-                    const std::vector<Param>& params) {
+                    std::string_view attempts_allowed, const std::vector<Param>& params) {
   const std::string said = "format('" + std::string(what) + "', worker)";
+  const std::string used_up = "attempts >= " + std::string(attempts_allowed);
   Result changed = connection.exec(
       "WITH changed AS ("
       "  UPDATE jobs SET"
-      "   state = CASE WHEN attempts >= max_attempts THEN 'failed' ELSE 'queued' END,"
-      "   error = CASE WHEN attempts >= max_attempts THEN format('%s on attempt %s of %s; giving up', " + said +
+      "   max_attempts = " + std::string(attempts_allowed) + ","
+      "   state = CASE WHEN " + used_up + " THEN 'failed' ELSE 'queued' END,"
+      "   error = CASE WHEN " + used_up + " THEN format('%s on attempt %s of %s; giving up', " + said +
           ", attempts, max_attempts) ELSE error END,"
-      "   finished_at = CASE WHEN attempts >= max_attempts THEN now() END,"
+      "   finished_at = CASE WHEN " + used_up + " THEN now() END,"
       "   lease_expires_at = NULL"
       "  WHERE " + std::string(where) +
           "  RETURNING id, attempts, state, worker"
@@ -182,12 +185,13 @@ int JobQueue::reap() {
   return requeue_or_fail(*connection,
                          "id IN (SELECT id FROM jobs WHERE state = 'running' AND lease_expires_at < now()"
                          " FOR UPDATE SKIP LOCKED)",
-                         "lease-expired", "lease of worker %s expired", {});
+                         "lease-expired", "lease of worker %s expired", "max_attempts", {});
 }
 
 bool JobQueue::release(const Lease& lease) {
   auto connection = pool_.acquire();
-  return requeue_or_fail(*connection, kLeaseHeld, "released", "worker %s stopped with its server",
+  // A clean stop is not the job's fault: the attempt it used is given back.
+  return requeue_or_fail(*connection, kLeaseHeld, "released", "worker %s stopped with its server", "max_attempts + 1",
                          {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 

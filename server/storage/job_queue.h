@@ -113,8 +113,8 @@ class JobQueue {
   // reason. Returns how many jobs it touched.
   int reap();
   // A worker whose server is stopping gives its job back at once instead of letting the lease
-  // run out: re-queued while it has attempts left, else failed, as reap() would. False when the
-  // lease was no longer this worker's.
+  // run out: re-queued, and allowed one more attempt, since a clean stop is not the job's fault.
+  // False when the lease was no longer this worker's.
   bool release(const Lease& lease);
 
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");

@@ -289,6 +289,16 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
   return LocalOrigin{row.float8(0, 0), row.float8(0, 1)};
 }
 
+void ResultStore::discard(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  // report_plots go with their report (ON DELETE CASCADE).
+  for (const char* table : {"reports", "maps", "tiles", "optimized_poses", "constraints", "submaps"})
+    connection->exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
+  connection->exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
+  transaction.commit();
+}
+
 void ResultStore::save_report(std::int64_t job_id, const Report& report) {
   if (!report.report.is_object()) throw std::invalid_argument("a report must be a JSON object");
   auto connection = pool_.acquire();

@@ -77,6 +77,10 @@ class ResultStore {
   void save_report(std::int64_t job_id, const Report& report);
   std::optional<Report> load_report(std::int64_t job_id);
 
+  // Removes everything the job stored, in one transaction: an attempt stopped halfway through
+  // storing (server stopped, lease lost) leaves rows that the next attempt's saves would collide with.
+  void discard(std::int64_t job_id);
+
  private:
   ConnectionPool& pool_;
 };

@@ -24,6 +24,9 @@ PY
 tar -cf "$work/s.tar" -C "$work" s
 "$BATHYSLAM" inspect "$work/s.tar" > "$work/inspect_tar.txt"
 diff "$work/inspect.txt" "$work/inspect_tar.txt"
+tar --format=pax -cf "$work/pax.tar" -C "$work" s
+"$BATHYSLAM" inspect "$work/pax.tar" > "$work/inspect_pax.txt"
+diff "$work/inspect.txt" "$work/inspect_pax.txt"
 tar -cf "$work/nojson.tar" -C "$work" --exclude survey.json s
 if "$BATHYSLAM" inspect "$work/nojson.tar" 2> "$work/err.txt"; then echo "inspect accepted a tar without survey.json" >&2; exit 1; fi
 grep -q "nojson.tar: the tar holds no survey.json" "$work/err.txt"

@@ -183,6 +183,31 @@ TEST(ResultStore, PosesTilesAndReportsRoundTrip) {
   EXPECT_EQ(f.results.load_report(f.job + 1), std::nullopt);
 }
 
+TEST(ResultStore, AnAttemptStoppedWhileStoringLeavesNothingTheNextOneCollidesWith) {
+  JobFixture f;
+  const std::int64_t other = f.jobs.enqueue({f.survey, "mchs"});
+  for (std::int64_t job : {f.job, other}) {
+    f.results.save_origin(job, {451000, 4629000});
+    f.results.save_submaps(job, {a_submap(0, true), a_submap(1, true)});
+    f.results.save_optimized_poses(job, {a_pose(0, 0, 0, 0), a_pose(0, 1, 0, 0)});
+    f.results.put_tile(job, {"png", 0, 0, 0}, {1});
+    f.results.save_report(job, {{{"ok", true}}, {{"plot.png", {1}}}});
+  }
+  EXPECT_THROW(f.results.save_submaps(f.job, {a_submap(0, true)}), DatabaseError);  // what a rerun met
+
+  f.results.discard(f.job);
+  EXPECT_TRUE(f.results.load_submaps(f.job).empty());
+  EXPECT_TRUE(f.results.tiles(f.job).empty());
+  EXPECT_EQ(f.results.load_report(f.job), std::nullopt);
+  EXPECT_EQ(f.results.origin(f.job), std::nullopt);
+  f.results.save_submaps(f.job, {a_submap(0, true), a_submap(1, true)});  // the next attempt stores
+  f.results.save_report(f.job, {{{"ok", true}}, {}});
+  // Another job's results are untouched.
+  EXPECT_EQ(f.results.load_submaps(other).size(), 2u);
+  EXPECT_EQ(f.results.tiles(other).size(), 1u);
+  EXPECT_TRUE(f.results.load_report(other));
+}
+
 TEST(ResultStore, DeletingASurveyRemovesEverythingUnderIt) {
   JobFixture f;
   // A second survey of another tenant, with the same kinds of rows, must survive.

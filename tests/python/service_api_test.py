@@ -6,6 +6,7 @@ BATHYSLAM_TEST_PG, PG_SH, PROTO_DIR, SMALL_BUNDLE (a simulated `small` bundle)."
 import hashlib
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -392,7 +393,10 @@ class DatabaseOutageTest(unittest.TestCase):
     """Health follows the database: a cluster of this test's own is stopped and started again."""
 
     def setUp(self):
-        self.cluster = os.path.join(tempfile.mkdtemp(prefix="bathyslam-outage-"), "pg")
+        parent = tempfile.mkdtemp(prefix="bathyslam-outage-")
+        self.addCleanup(shutil.rmtree, parent, ignore_errors=True)
+        self.cluster = os.path.join(parent, "pg")
+        self.addCleanup(subprocess.run, ["bash", ENV["PG_SH"], "destroy", self.cluster], capture_output=True)
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
         self.server = Server(self.cluster)
         self.health = health_pb2_grpc.HealthStub(self.server.channel)
@@ -400,7 +404,6 @@ class DatabaseOutageTest(unittest.TestCase):
     def tearDown(self):
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
         self.server.stop()
-        subprocess.run(["bash", ENV["PG_SH"], "destroy", self.cluster], check=True, capture_output=True)
 
     def wait_for(self, status, seconds=15):
         deadline = time.monotonic() + seconds
