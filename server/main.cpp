@@ -72,6 +72,14 @@ struct ServeOptions {
 };
 
 int serve(const ServeOptions& o) {
+  // Block the stop signals before any thread starts, so every thread inherits the mask; one
+  // thread waits for them and shuts down cleanly.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
   storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers));
   storage::SurveyStore surveys(pool);
   storage::JobQueue jobs(pool, {std::chrono::seconds(o.lease_seconds), std::chrono::seconds(5)});
@@ -82,15 +90,9 @@ int serve(const ServeOptions& o) {
       o.scratch.empty() ? std::filesystem::temp_directory_path() / ("bathyslam-server-" + std::to_string(getpid()))
                         : std::filesystem::path(o.scratch);
   service::SurveyService survey_service(context, scratch);
-  service::JobService job_service(context);
+  service::JobEventBell job_event_bell(o.db);
+  service::JobService job_service(context, job_event_bell);
   service::MapService map_service(context);
-
-  // Block the stop signals in every thread; one thread waits for them and shuts down cleanly.
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

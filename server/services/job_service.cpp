@@ -12,8 +12,9 @@ namespace {
 
 namespace storage = bathyslam::storage;
 
-// How often WatchJob looks for new events: progress bars move smoothly, the database barely notices.
-constexpr auto kWatchPoll = std::chrono::milliseconds(200);
+// WatchJob sleeps until the job's bell rings; this long at most, should a notification be lost
+// (the bell's LISTEN connection down while the database restarts).
+constexpr auto kWatchFallback = std::chrono::seconds(2);
 
 v1::JobState to_proto(storage::JobState state) {
   switch (state) {
@@ -126,6 +127,8 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
     std::int64_t last_event = 0;
     // Until the client goes away (or its deadline passes) or the job ends.
     while (!call->IsCancelled()) {
+      // The bell's count before reading: a change from here on wakes the wait below.
+      const std::uint64_t rings = bell_.rings(job.id);
       // The state first: events written before a final state are all read below.
       auto now = context_.jobs.job(job.id);
       if (!now) throw Refusal(grpc::StatusCode::NOT_FOUND, "job_id: job " + std::to_string(job.id) + " was deleted");
@@ -154,7 +157,7 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
         writer->Write(end);
         return;
       }
-      std::this_thread::sleep_for(kWatchPoll);
+      bell_.wait(job.id, rings, kWatchFallback);
     }
   });
 }

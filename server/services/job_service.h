@@ -1,13 +1,14 @@
 #pragma once
 // bathyslam.v1.JobService: submit SLAM jobs, follow them, cancel them, read their reports.
 #include "bathyslam/v1/job.grpc.pb.h"
+#include "server/services/job_event_bell.h"
 #include "server/services/service_context.h"
 
 namespace bathyslam::server {
 
 class JobService final : public v1::JobService::Service {
  public:
-  explicit JobService(ServiceContext& context) : context_(context) {}
+  JobService(ServiceContext& context, JobEventBell& bell) : context_(context), bell_(bell) {}
 
   grpc::Status SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) override;
   grpc::Status GetJob(grpc::ServerContext* call, const v1::GetJobRequest* request, v1::Job* reply) override;
@@ -19,6 +20,7 @@ class JobService final : public v1::JobService::Service {
 
  private:
   ServiceContext& context_;
+  JobEventBell& bell_;
 };
 
 }  // namespace bathyslam::server

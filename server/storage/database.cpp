@@ -178,6 +178,30 @@ void Connection::ensure_alive() {
   if (PQstatus(conn_.get()) != CONNECTION_OK) throw connection_error(conn_.get());
 }
 
+std::unique_ptr<Connection> open_listener(const std::string& conninfo, std::string_view channel) {
+  try {
+    auto connection = std::make_unique<Connection>(conninfo);
+    connection->exec("LISTEN " + std::string(channel));
+    return connection;
+  } catch (const DatabaseError&) {
+    return nullptr;
+  }
+}
+
+std::optional<std::vector<std::string>> await_notifications(Connection& connection, std::chrono::milliseconds timeout) {
+  pollfd descriptor{PQsocket(connection.raw()), POLLIN, 0};
+  if (descriptor.fd < 0) return std::nullopt;
+  if (poll(&descriptor, 1, static_cast<int>(timeout.count())) < 0) return std::nullopt;
+  if (!PQconsumeInput(connection.raw())) return std::nullopt;
+  std::vector<std::string> payloads;
+  while (PGnotify* notification = PQnotifies(connection.raw())) {
+    payloads.emplace_back(notification->extra);
+    PQfreemem(notification);
+  }
+  if (PQstatus(connection.raw()) != CONNECTION_OK) return std::nullopt;
+  return payloads;
+}
+
 bool Connection::in_transaction() const { return PQtransactionStatus(conn_.get()) != PQTRANS_IDLE; }
 
 PooledConnection::~PooledConnection() {

@@ -143,6 +143,13 @@ class ConnectionPool {
   std::condition_variable returned_;
 };
 
+// A connection of its own that LISTENs on `channel` (a constant identifier); nullptr when it
+// cannot be opened (the caller polls instead).
+std::unique_ptr<Connection> open_listener(const std::string& conninfo, std::string_view channel);
+// Sleeps until notifications arrive on a listening connection or `timeout` passes; their
+// payloads (none after a timeout), or nullopt when the connection broke.
+std::optional<std::vector<std::string>> await_notifications(Connection& connection, std::chrono::milliseconds timeout);
+
 // BEGIN now, ROLLBACK on scope exit unless commit() was called: an exception anywhere between
 // leaves the database as it was.
 class Transaction {

@@ -1,7 +1,5 @@
 #include "server/storage/job_queue.h"
 
-#include <poll.h>
-
 #include <array>
 #include <memory>
 #include <stdexcept>
@@ -20,27 +18,6 @@ constexpr std::string_view kLeaseHeld = "id = $1 AND worker = $2 AND attempts = 
 
 std::string with_lease(std::string_view head, std::string_view tail = "") {
   return std::string(head) + " WHERE " + std::string(kLeaseHeld) + std::string(tail);
-}
-
-// A dedicated connection that LISTENs; nullptr when it cannot be opened (the caller polls).
-std::unique_ptr<Connection> listen(const std::string& conninfo) {
-  try {
-    auto connection = std::make_unique<Connection>(conninfo);
-    connection->exec("LISTEN " + std::string(kChannel));
-    return connection;
-  } catch (const DatabaseError&) {
-    return nullptr;
-  }
-}
-
-// Sleeps until a notification arrives or `timeout` passes. False when the connection broke.
-bool await_notification(Connection& connection, std::chrono::milliseconds timeout) {
-  pollfd descriptor{PQsocket(connection.raw()), POLLIN, 0};
-  if (descriptor.fd < 0) return false;
-  if (poll(&descriptor, 1, static_cast<int>(timeout.count())) < 0) return false;
-  if (!PQconsumeInput(connection.raw())) return false;
-  while (PGnotify* notification = PQnotifies(connection.raw())) PQfreemem(notification);
-  return PQstatus(connection.raw()) == CONNECTION_OK;
 }
 
 }  // namespace
@@ -102,13 +79,13 @@ std::optional<ClaimedJob> JobQueue::wait_for_job(const std::string& worker, std:
   while (true) {
     reap();
     if (auto job = claim(worker)) return job;
-    if (!listener && (listener = listen(pool_.conninfo()))) {
+    if (!listener && (listener = open_listener(pool_.conninfo(), kChannel))) {
       continue;  // claim once more now that we listen: a job enqueued just before is not missed
     }
     const Clock::time_point now = Clock::now();
     if (now >= deadline) return std::nullopt;
     auto wait = std::min(options_.poll, std::chrono::ceil<std::chrono::milliseconds>(deadline - now));
-    if (listener && await_notification(*listener, wait)) continue;
+    if (listener && await_notifications(*listener, wait)) continue;
     // No listener, or it broke (the server restarted): poll this round, listen again next.
     if (!listener) std::this_thread::sleep_for(wait);
     listener.reset();

@@ -1,0 +1,74 @@
+#include "server/services/job_event_bell.h"
+
+#include <charconv>
+
+#include "server/log.h"
+#include "server/storage/database.h"
+
+namespace bathyslam::server {
+namespace {
+
+constexpr std::string_view kChannel = "bathyslam_job_events";
+// How long one wait on the socket lasts: how soon the destructor is noticed.
+constexpr auto kListenSlice = std::chrono::milliseconds(200);
+
+}  // namespace
+
+JobEventBell::JobEventBell(std::string conninfo) : conninfo_(std::move(conninfo)), thread_([this] { listen(); }) {}
+
+JobEventBell::~JobEventBell() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  thread_.join();
+}
+
+std::uint64_t JobEventBell::rings(std::int64_t job_id) {
+  std::lock_guard lock(mutex_);
+  const auto found = rings_.find(job_id);
+  return found == rings_.end() ? 0 : found->second;
+}
+
+void JobEventBell::wait(std::int64_t job_id, std::uint64_t seen, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  rang_.wait_for(lock, timeout, [&] {
+    const auto found = rings_.find(job_id);
+    return stopping_ || (found != rings_.end() && found->second > seen);
+  });
+}
+
+void JobEventBell::listen() {
+  std::unique_ptr<storage::Connection> connection;
+  bool reported = false;
+  while (true) {
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) break;
+    }
+    if (!connection && !(connection = storage::open_listener(conninfo_, kChannel))) {
+      if (!reported) log("job events: cannot LISTEN; watchers fall back to polling");
+      reported = true;
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      continue;
+    }
+    reported = false;
+    const auto payloads = storage::await_notifications(*connection, kListenSlice);
+    if (!payloads) {
+      connection.reset();  // the database went away; listen again once it is back
+      continue;
+    }
+    if (payloads->empty()) continue;
+    {
+      std::lock_guard lock(mutex_);
+      for (const std::string& payload : *payloads) {
+        std::int64_t job_id = 0;
+        if (std::from_chars(payload.data(), payload.data() + payload.size(), job_id).ec == std::errc()) ++rings_[job_id];
+      }
+    }
+    rang_.notify_all();
+  }
+  rang_.notify_all();
+}
+
+}  // namespace bathyslam::server
