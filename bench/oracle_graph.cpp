@@ -31,9 +31,7 @@ int main(int argc, char** argv) try {
     const std::string kv = argv[i];
     if (kv == "--no-loops") { loops_on = false; continue; }
     if (kv == "--edges" && i + 1 < argc) { report = argv[++i]; continue; }
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("expected key=value, got '" + kv + "'");
-    set_parameter(config, kv.substr(0, eq), kv.substr(eq + 1));
+    set_parameter(config, kv);
   }
   const Survey survey = load_bundle(argv[1]);
   const SubmapSet set = build_submaps(survey, config.submaps);

@@ -28,9 +28,7 @@ int main(int argc, char** argv) try {
   for (int i = 3; i < argc; ++i) {
     const std::string kv = argv[i];
     if (kv == "--uniform") { uniform = true; continue; }
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("expected key=value, got '" + kv + "'");
-    set_parameter(config, kv.substr(0, eq), kv.substr(eq + 1));
+    set_parameter(config, kv);
   }
   if (config.submaps.pings_per_submap != PipelineConfig{}.submaps.pings_per_submap) {
     throw std::runtime_error(std::string(argv[2]) + ": made with submaps.pings_per_submap=" +

@@ -48,7 +48,7 @@ Report read_report(const std::string& path, int submaps) {
     const nlohmann::json parsed = nlohmann::json::parse(in);
     report.config.configuration = parse_configuration(parsed.at("configuration").get<std::string>());
     for (const auto& [key, value] : parsed.at("parameters").items()) {
-      set_parameter(report.config, key, nlohmann::json(value.get<double>()).dump());
+      set_parameter(report.config, key, value.get<double>());
     }
     registrations = parsed.at("registrations");
   } catch (const std::exception& e) {

@@ -1,6 +1,5 @@
 #pragma once
 // The registrations of a report.json, read back as the benchmarks need them to rebuild edges.
-#include <optional>
 #include <string>
 #include <vector>
 

@@ -53,11 +53,7 @@ void run_process(const ProcessOptions& o) {
   PipelineConfig config;
   config.configuration = parse_configuration(o.config);
   config.threads = o.threads;
-  for (const std::string& kv : o.sets) {
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("--set expects key=value, got '" + kv + "'");
-    set_parameter(config, kv.substr(0, eq), kv.substr(eq + 1));
-  }
+  for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
   const Survey survey = load_bundle(o.bundle);

@@ -1,8 +1,10 @@
 #include "core/pipeline/pipeline.h"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <type_traits>
 
@@ -250,31 +252,57 @@ std::string to_string(ConstraintType t) {
   return "?";
 }
 
-void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
+namespace {
+
+// Sets `name` to `value` (nullopt: the text was not a number) after the range check; messages
+// quote the value as the caller gave it (`shown`).
+void assign_parameter(PipelineConfig& config, const std::string& name, std::optional<double> value,
+                      const std::string& shown) {
   bool found = false;
   visit_parameters(config, [&](std::string_view key, auto& field, double min, double max) {
     if (key != name) return;
     found = true;
     using Field = std::remove_reference_t<decltype(field)>;
     constexpr bool integer = std::is_integral_v<Field>;
-    double v = 0;
-    std::size_t used = 0;
-    try {
-      v = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
+    if (!value || !std::isfinite(*value)) {
+      throw std::invalid_argument("parameter '" + name + "': '" + shown + "' is not a number");
     }
-    if (used != value.size() || !std::isfinite(v)) {
-      throw std::invalid_argument("parameter '" + name + "': '" + value + "' is not a number");
-    }
+    const double v = *value;
     if (v < min || v > max || (integer && v != std::floor(v))) {
-      throw std::invalid_argument("parameter '" + name + "': " + value + " is outside [" +
+      throw std::invalid_argument("parameter '" + name + "': " + shown + " is outside [" +
                                   std::to_string(min) + ", " + std::to_string(max) + "]" +
                                   (integer ? " or not an integer" : ""));
     }
     field = static_cast<Field>(v);
   });
   if (!found) throw std::invalid_argument("unknown parameter '" + name + "'");
+}
+
+}  // namespace
+
+void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
+  std::optional<double> number;
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(value, &used);
+    if (used == value.size()) number = v;
+  } catch (const std::exception&) {
+  }
+  assign_parameter(config, name, number, value);
+}
+
+void set_parameter(PipelineConfig& config, const std::string& name, double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  assign_parameter(config, name, value, std::string(text, end));
+}
+
+void set_parameter(PipelineConfig& config, std::string_view assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string_view::npos) {
+    throw std::invalid_argument("expected name=value, got '" + std::string(assignment) + "'");
+  }
+  set_parameter(config, std::string(assignment.substr(0, eq)), std::string(assignment.substr(eq + 1)));
 }
 
 std::map<std::string, double> parameters(const PipelineConfig& config) {

@@ -56,6 +56,10 @@ struct PipelineConfig {
 // Sets one parameter by its name ("gicp.max_correspondence_m", ...); throws
 // std::invalid_argument naming the parameter when the name is unknown or the value out of range.
 void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value);
+// The same for a number already parsed (a job's stored parameters, a report's).
+void set_parameter(PipelineConfig& config, const std::string& name, double value);
+// The same from one "name=value" argument (`--set`); a missing '=' is named too.
+void set_parameter(PipelineConfig& config, std::string_view assignment);
 // Every parameter by name with its current value.
 std::map<std::string, double> parameters(const PipelineConfig& config);
 

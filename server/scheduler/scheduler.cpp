@@ -1,7 +1,6 @@
 #include "server/scheduler/scheduler.h"
 
 #include <algorithm>
-#include <charconv>
 #include <condition_variable>
 #include <fstream>
 #include <mutex>
@@ -72,11 +71,7 @@ class JobWatcher {
 PipelineConfig job_config(const storage::ClaimedJob& job, int threads) {
   PipelineConfig config;
   config.configuration = parse_configuration(job.configuration);
-  for (const auto& [name, value] : job.parameters.items()) {
-    char text[64];
-    const auto end = std::to_chars(text, text + sizeof text, value.get<double>()).ptr;
-    set_parameter(config, name, std::string(text, end));
-  }
+  for (const auto& [name, value] : job.parameters.items()) set_parameter(config, name, value.get<double>());
   if (config.threads == 0) config.threads = threads;
   return config;
 }

@@ -35,7 +35,28 @@ TEST(Parameters, BadNamesAndValuesAreRejectedByName) {
   EXPECT_THAT(message("gicp.max_iterations", "12.5"), HasSubstr("or not an integer"));
   EXPECT_THAT(message("gicp.max_iterations", "-3"), HasSubstr("is outside"));
   EXPECT_THAT(message("voxel.leaf_x_m", "0.2m"), HasSubstr("'0.2m' is not a number"));
+  EXPECT_THAT(message("voxel.leaf_x_m", ""), HasSubstr("'' is not a number"));
   EXPECT_EQ(config.registration.gicp.max_iterations, 300) << "a rejected value changes nothing";
+}
+
+TEST(Parameters, StoredNumbersAndNameValueArgumentsGoThroughTheSameChecks) {
+  PipelineConfig config;
+  set_parameter(config, "candidates.k_adjacent_lines", 2.0);  // a job's or a report's stored value
+  set_parameter(config, "gicp.neighbours=25");                // a --set argument
+  EXPECT_EQ(config.candidates.k_adjacent_lines, 2);
+  EXPECT_EQ(config.registration.gicp.neighbours, 25);
+  auto message = [&](auto&&... arguments) {
+    try {
+      set_parameter(config, arguments...);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(message("candidates.k_adjacent_lines", 2.5), HasSubstr("parameter 'candidates.k_adjacent_lines': 2.5 is outside"));
+  EXPECT_THAT(message(std::string_view("gicp.neighbours25")), HasSubstr("expected name=value, got 'gicp.neighbours25'"));
+  EXPECT_THAT(message(std::string_view("gicp.neighbour=25")), HasSubstr("unknown parameter 'gicp.neighbour'"));
+  EXPECT_EQ(config.registration.gicp.neighbours, 25) << "a rejected value changes nothing";
 }
 
 }  // namespace
