@@ -64,6 +64,11 @@ class Server:
         if not match:
             raise RuntimeError("server did not start: " + line + self.server_log())
         self.channel = grpc.insecure_channel(match.group(1), options=[("grpc.max_receive_message_length", 64 << 20)])
+        # Stubs on this process's channel: a restart gives new ones.
+        self.surveys = survey_pb2_grpc.SurveyServiceStub(self.channel)
+        self.jobs = job_pb2_grpc.JobServiceStub(self.channel)
+        self.maps = map_pb2_grpc.MapServiceStub(self.channel)
+        self.health = health_pb2_grpc.HealthStub(self.channel)
 
     def server_log(self):
         self.log.flush()
@@ -79,6 +84,7 @@ class Server:
 
     def stop(self):
         self.halt()
+        self.log.close()
         psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
 
 
@@ -116,9 +122,7 @@ class ServiceApiTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.server = Server()
-        cls.surveys = survey_pb2_grpc.SurveyServiceStub(cls.server.channel)
-        cls.jobs = job_pb2_grpc.JobServiceStub(cls.server.channel)
-        cls.maps = map_pb2_grpc.MapServiceStub(cls.server.channel)
+        cls.surveys, cls.jobs, cls.maps = cls.server.surveys, cls.server.jobs, cls.server.maps
 
     @classmethod
     def tearDownClass(cls):
@@ -150,8 +154,7 @@ class ServiceApiTest(unittest.TestCase):
         return raised.exception.details()
 
     def test_health_serving(self):
-        health = health_pb2_grpc.HealthStub(self.server.channel)
-        reply = health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
+        reply = self.server.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
         self.assertEqual(reply.status, health_pb2.HealthCheckResponse.SERVING)
 
     def test_round_trip_with_a_cut_upload(self):
@@ -367,11 +370,10 @@ class ServerStopTest(unittest.TestCase):
         self.server.stop()
 
     def test_a_running_job_is_given_back_when_its_server_stops(self):
-        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
-        survey_id = ready_survey(survey_pb2_grpc.SurveyServiceStub(self.server.channel), "stop")
-        job = jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp",
+        survey_id = ready_survey(self.server.surveys, "stop")
+        job = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp",
                                                       parameters={"threads": "1"}), timeout=30)
-        for event in jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
+        for event in self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
             if event.stage == "register":
                 break
         self.server.halt()
@@ -381,12 +383,11 @@ class ServerStopTest(unittest.TestCase):
         self.assertIn("given back to the queue", self.server.server_log())
 
         self.server.start()
-        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
-        events = list(jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120))
+        events = list(self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120))
         self.assertEqual(events[-1].state, job_pb2.SUCCEEDED, self.server.server_log())
         stages = psql(self.server.url, f"SELECT string_agg(stage, ' ' ORDER BY id) FROM job_events WHERE job_id = {job.id}")
         self.assertIn("register released load", stages)
-        self.assertEqual(jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
+        self.assertEqual(self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
 
 
 class DatabaseOutageTest(unittest.TestCase):
@@ -399,7 +400,6 @@ class DatabaseOutageTest(unittest.TestCase):
         self.addCleanup(subprocess.run, ["bash", ENV["PG_SH"], "destroy", self.cluster], capture_output=True)
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
         self.server = Server(self.cluster)
-        self.health = health_pb2_grpc.HealthStub(self.server.channel)
 
     def tearDown(self):
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
@@ -408,7 +408,7 @@ class DatabaseOutageTest(unittest.TestCase):
     def wait_for(self, status, seconds=15):
         deadline = time.monotonic() + seconds
         while True:
-            reply = self.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
+            reply = self.server.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
             if reply.status == status or time.monotonic() > deadline:
                 return reply.status
             time.sleep(0.2)
@@ -418,15 +418,14 @@ class DatabaseOutageTest(unittest.TestCase):
         self.assertEqual(self.wait_for(serving), serving)
         subprocess.run(["bash", ENV["PG_SH"], "stop", self.cluster], check=True, capture_output=True)
         self.assertEqual(self.wait_for(not_serving), not_serving, self.server.server_log())
-        jobs = job_pb2_grpc.JobServiceStub(self.server.channel)
         with self.assertRaises(grpc.RpcError) as raised:
-            jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)
+            self.server.jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)
         self.assertEqual(raised.exception.code(), grpc.StatusCode.UNAVAILABLE, raised.exception.details())
         self.assertIn("database", raised.exception.details())
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
         self.assertEqual(self.wait_for(serving), serving, self.server.server_log())
         self.assertIn("database unreachable", self.server.server_log())
-        jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)  # the pool reconnects
+        self.server.jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=30)  # the pool reconnects
 
 
 if __name__ == "__main__":
