@@ -36,6 +36,13 @@ std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d&
   if (static_cast<int>(q.overlap_points) < config.min_overlap_points) {
     return format("overlap points %.0f < %.0f", static_cast<double>(q.overlap_points), config.min_overlap_points);
   }
+  if (config.max_competitor_ratio > 0 && r.path == RegistrationPath::kFeatureAided && r.ransac_inliers > 0) {
+    const double ratio = static_cast<double>(r.competitor_inliers) / r.ransac_inliers;
+    if (ratio >= config.max_competitor_ratio) {
+      return format("ambiguous (a second alignment %.1f m away has %.0f of the winner's %.0f inliers)", r.competitor_separation_m,
+                    static_cast<double>(r.competitor_inliers), static_cast<double>(r.ransac_inliers));
+    }
+  }
   const double moved = (r.registration.source_to_target.translation() - guess.translation()).norm();
   if (moved > config.max_translation_m) return format("translation from dead reckoning %.1f m > %.1f m", moved, config.max_translation_m);
   return {};

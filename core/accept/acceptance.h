@@ -15,6 +15,10 @@ struct AcceptanceConfig {  // Table 1 (b)
   double max_overlap_mse_m2 = 5.0;
   int min_overlap_points = 500;
   double max_translation_m = 100.0;  // how far the registration may move the source from DR
+  // Uniqueness (feature-aided path): a pair whose best distinct alternative alignment has at
+  // least this share of the winner's RANSAC inliers has no unique solution (a periodic seabed,
+  // parallel ridges) and is refused. 0 turns the test off.
+  double max_competitor_ratio = 0.5;
 };
 
 // Empty when accepted; otherwise the first failed test in words. A loop closure spans the

@@ -5,6 +5,8 @@
 #include <numeric>
 #include <unordered_map>
 
+#include <Eigen/Geometry>
+
 namespace bathyslam {
 
 ErrorStats error_stats(std::vector<double> errors) {
@@ -90,6 +92,28 @@ std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Ei
   return errors;
 }
 
+std::vector<double> aligned_trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses) {
+  std::vector<Eigen::Vector2d> estimate, reference;
+  for (const Submap& s : set.submaps) {
+    if (!s.reference_pose) continue;
+    estimate.push_back(poses[s.index].translation().head<2>());
+    reference.push_back(s.reference_pose->translation().head<2>());
+  }
+  if (estimate.size() < 2) return trajectory_errors(set, poses);
+  Eigen::Matrix2Xd from(2, estimate.size()), to(2, reference.size());
+  for (std::size_t k = 0; k < estimate.size(); ++k) {
+    from.col(static_cast<Eigen::Index>(k)) = estimate[k];
+    to.col(static_cast<Eigen::Index>(k)) = reference[k];
+  }
+  const Eigen::Matrix3d alignment = Eigen::umeyama(from, to, false);
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < estimate.size(); ++k) {
+    const Eigen::Vector2d aligned = alignment.topLeftCorner<2, 2>() * estimate[k] + alignment.topRightCorner<2, 1>();
+    errors.push_back((aligned - reference[k]).norm());
+  }
+  return errors;
+}
+
 std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int from, int to,
                                                      const Eigen::Isometry3d& measured) {
   const auto& a = set.submaps[from].reference_pose;
@@ -98,6 +122,20 @@ std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int f
   const Eigen::Isometry3d error = (a->inverse() * *b).inverse() * measured;
   return RelativePoseError{error.translation().norm(), error.translation().head<2>().norm(),
                            std::atan2(error.rotation()(1, 0), error.rotation()(0, 0)) * 180.0 / M_PI};
+}
+
+std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from, int to, const Eigen::Isometry3d& measured,
+                                                 const Eigen::Vector3d& anchor,
+                                                 const Eigen::Matrix<double, 6, 6>& information) {
+  const auto& a = set.submaps[from].reference_pose;
+  const auto& b = set.submaps[to].reference_pose;
+  if (!a || !b) return std::nullopt;
+  const Eigen::Isometry3d truth = a->inverse() * *b;
+  const Eigen::Vector2d e_xy = (measured * anchor - truth * anchor).head<2>();
+  const Eigen::Matrix3d turn = truth.rotation().transpose() * measured.rotation();
+  const double e_yaw = std::atan2(turn(1, 0), turn(0, 0));
+  const double horizontal2 = e_xy.dot(information.topLeftCorner<2, 2>() * e_xy);
+  return EdgeErrorSigmas{std::sqrt(std::max(0.0, horizontal2)), std::abs(e_yaw) * std::sqrt(std::max(0.0, information(5, 5)))};
 }
 
 }  // namespace bathyslam

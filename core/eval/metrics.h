@@ -40,6 +40,12 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
 // Horizontal distance of each submap pose from its reference pose (the first pose is shared).
 std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);
 
+// The same after the best rigid 2D alignment (a turn about the vertical and a shift, Umeyama
+// without scale) of the poses onto the reference: the absolute trajectory error that published
+// bathymetric SLAM results report. A relative method cannot observe a rotation of the whole
+// survey (a heading bias shared by every line); this error does not charge it for one.
+std::vector<double> aligned_trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);
+
 // How far a measured relative pose (`to` in the frame of `from`) is from the one the reference
 // poses give; nullopt without a reference.
 struct RelativePoseError {
@@ -49,5 +55,16 @@ struct RelativePoseError {
 };
 std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int from, int to,
                                                      const Eigen::Isometry3d& measured);
+
+// How many standard deviations of its own information a graph edge is off the reference, where
+// the graph compares it: horizontally at its anchor (`to`'s frame) in `from`'s frame, and in yaw.
+// An edge many sigmas off is confidently wrong: it pulls the map with weight it has not earned.
+struct EdgeErrorSigmas {
+  double horizontal = 0;  // sqrt(e_xy' * information_xy * e_xy)
+  double yaw = 0;         // |e_yaw| * sqrt(information_yaw)
+};
+std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from, int to, const Eigen::Isometry3d& measured,
+                                                 const Eigen::Vector3d& anchor,
+                                                 const Eigen::Matrix<double, 6, 6>& information);
 
 }  // namespace bathyslam

@@ -34,6 +34,16 @@ double median(std::vector<double> v) {
   return v[mid];
 }
 
+// Largest distance between where `a` and `b` put any of the points.
+double largest_displacement(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const std::vector<Eigen::Vector3d>& points) {
+  double largest = 0;
+  for (const Eigen::Vector3d& p : points) largest = std::max(largest, (a * p - b * p).norm());
+  return largest;
+}
+
+void find_competitor(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                     const RansacConfig& config, RansacResult& winner);
+
 }  // namespace
 
 RansacResult adaptive_ransac(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
@@ -87,7 +97,38 @@ RansacResult adaptive_ransac(const std::vector<Eigen::Vector3d>& source, const s
   }
   best.threshold_m = threshold;
   best.inlier_ratio = static_cast<double>(best.inliers.size()) / n;
+  if (config.find_competitor && static_cast<int>(best.inliers.size()) >= config.min_inliers) {
+    find_competitor(source, target, config, best);
+  }
   return best;
 }
 
+namespace {
+
+// RANSAC on the matches the winner left out, at the winner's threshold: a transform that
+// explains many of them and lies far from the winner is a second solution of the pair.
+void find_competitor(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                     const RansacConfig& config, RansacResult& winner) {
+  std::vector<Eigen::Vector3d> rest_source, rest_target;
+  std::vector<bool> inlier(source.size(), false);
+  for (int i : winner.inliers) inlier[i] = true;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    if (inlier[i]) continue;
+    rest_source.push_back(source[i]);
+    rest_target.push_back(target[i]);
+  }
+  // The competitor is judged at the winner's tolerance, not a looser one of its own.
+  RansacConfig rest = config;
+  rest.find_competitor = false;
+  rest.initial_threshold_m = rest.min_threshold_m = winner.threshold_m;
+  rest.seed = config.seed + 1;
+  const RansacResult competitor = adaptive_ransac(rest_source, rest_target, rest);
+  if (static_cast<int>(competitor.inliers.size()) < config.min_inliers) return;
+  const double separation = largest_displacement(winner.source_to_target, competitor.source_to_target, source);
+  if (separation < config.competitor_separation_m) return;  // the same solution, noisier matches
+  winner.competitor_inliers = static_cast<int>(competitor.inliers.size());
+  winner.competitor_separation_m = separation;
+}
+
+}  // namespace
 }  // namespace bathyslam

@@ -17,6 +17,12 @@ struct RansacConfig {  // Table 1 (b)
   double mad_scale = 3.0;            // threshold = median + mad_scale * 1.4826 * MAD of inlier errors
   double min_threshold_m = 0.5;      // the grid's keypoint localisation: never tighter than this
   uint64_t seed = 1;
+  // Periodic seabeds (sand waves, parallel ridges) give several alignments that each explain a
+  // share of the matches. After the winner, RANSAC runs again on the matches it left out; a
+  // competing transform that places some matched keypoint at least this far from where the
+  // winner does is a distinct solution, and its support is reported (acceptance judges it).
+  bool find_competitor = true;
+  double competitor_separation_m = 3.0;
 };
 
 struct RansacResult {
@@ -25,6 +31,10 @@ struct RansacResult {
   double threshold_m = 0;    // the adaptive threshold at the end
   double inlier_ratio = 0;   // inliers over correspondences
   int iterations = 0;
+  // The best distinct alternative (find_competitor): its inliers among the matches the winner
+  // left out, and how far apart the two put the matched keypoints (largest displacement).
+  int competitor_inliers = 0;
+  double competitor_separation_m = 0;
 };
 
 // `source[i]` corresponds to `target[i]`; the order is PROSAC's (best first). Deterministic for

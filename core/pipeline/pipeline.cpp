@@ -69,6 +69,8 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
   visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
   visit("accept.max_translation_m", c.acceptance.max_translation_m, 0, 100000);
+  visit("accept.max_competitor_ratio", c.acceptance.max_competitor_ratio, 0, 1);
+  visit("ransac.competitor_separation_m", c.registration.ransac.competitor_separation_m, 0.01, 1000);
   visit("quality.sigma_x_m", c.quality.best_sigma_translation_m.x(), 1e-4, 1e3);
   visit("quality.sigma_y_m", c.quality.best_sigma_translation_m.y(), 1e-4, 1e3);
   visit("quality.sigma_z_m", c.quality.best_sigma_translation_m.z(), 1e-4, 1e3);
@@ -374,6 +376,8 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   report("eval", 0);
   r.dr_trajectory_errors = trajectory_errors(r.submaps, r.dr_poses);
   r.trajectory_errors = trajectory_errors(r.submaps, r.optimized_poses);
+  r.dr_aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.dr_poses);
+  r.aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.optimized_poses);
   r.dr_consistency = consistency_error(r.submaps, r.dr_poses, config.consistency);
   r.consistency = consistency_error(r.submaps, r.optimized_poses, config.consistency);
   clock.done("eval");

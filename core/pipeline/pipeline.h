@@ -100,6 +100,8 @@ struct PipelineResult {
   std::vector<Constraint> constraints;
   GraphSolution graph;
   std::vector<double> dr_trajectory_errors, trajectory_errors;  // per submap with a reference
+  // The same after the best rigid 2D alignment onto the reference (eval/metrics.h).
+  std::vector<double> dr_aligned_trajectory_errors, aligned_trajectory_errors;
   ConsistencyReport dr_consistency, consistency;
   std::vector<StageTiming> timings;
 };

@@ -85,6 +85,10 @@ nlohmann::json registrations_json(const PipelineResult& r) {
     if (nlohmann::json e = error_json(c.measured); !e.is_null()) {
       j["error_vs_reference"] = e;
       j["guess_error_vs_reference"] = error_json(c.guess);
+      if (c.accepted) {
+        const auto sigmas = edge_error_sigmas(r.submaps, c.from, c.to, c.measured, c.anchor, c.information);
+        j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}};
+      }
     }
     list.push_back(std::move(j));
   }
@@ -110,6 +114,8 @@ nlohmann::json report_json(const PipelineResult& r) {
                      {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost}}},
           {"trajectory_error_m", {{"optimized", stats_json(error_stats(r.trajectory_errors))},
                                   {"dead_reckoning", stats_json(error_stats(r.dr_trajectory_errors))},
+                                  {"aligned", {{"optimized", stats_json(error_stats(r.aligned_trajectory_errors))},
+                                               {"dead_reckoning", stats_json(error_stats(r.dr_aligned_trajectory_errors))}}},
                                   {"per_pose", r.trajectory_errors}}},
           {"consistency_error_m", {{"optimized", stats_json(r.consistency.stats)},
                                    {"dead_reckoning", stats_json(r.dr_consistency.stats)},
@@ -119,6 +125,7 @@ nlohmann::json report_json(const PipelineResult& r) {
 
 std::string report_summary(const PipelineResult& r) {
   const ErrorStats t = error_stats(r.trajectory_errors), t0 = error_stats(r.dr_trajectory_errors);
+  const ErrorStats ta = error_stats(r.aligned_trajectory_errors), ta0 = error_stats(r.dr_aligned_trajectory_errors);
   const ErrorStats& c = r.consistency.stats;
   const ErrorStats& c0 = r.dr_consistency.stats;
   std::size_t registrations = 0, accepted = 0;
@@ -131,9 +138,10 @@ std::string report_summary(const PipelineResult& r) {
   std::snprintf(text, sizeof text,
                 "configuration %s: %zu submaps on %zu lines, %zu/%zu registrations accepted\n"
                 "trajectory error   rmse %.2f m, mean %.2f m, std %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
+                "  aligned (2D)     rmse %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
                 "consistency error  rmse %.3f m, p95 %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
                 to_string(r.config.configuration).c_str(), r.submaps.submaps.size(), r.submaps.lines.size(),
-                accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, c.rmse, c.p95, c.p99, c.count,
+                accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse, c.rmse, c.p95, c.p99, c.count,
                 c0.rmse);
   return text;
 }

@@ -78,6 +78,8 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
   r.feature_density = density;
   r.matches = static_cast<int>(matches.size());
   r.ransac_inliers = static_cast<int>(coarse.inliers.size());
+  r.competitor_inliers = coarse.competitor_inliers;
+  r.competitor_separation_m = coarse.competitor_separation_m;
   r.inlier_ratio = coarse.inlier_ratio;
   return r;
 }

@@ -49,6 +49,9 @@ struct PairRegistration {
   double feature_density = 0;
   int matches = 0;
   int ransac_inliers = 0;
+  // RANSAC's best distinct alternative (feature-aided path): its support and separation.
+  int competitor_inliers = 0;
+  double competitor_separation_m = 0;
   // RANSAC's inlier share on the feature-aided path; GICP's fitness (share of source points
   // with a target point within the gate) on the direct path.
   double inlier_ratio = 0;

@@ -59,6 +59,39 @@ PairClouds pair_of(const SyntheticTerrain& target_terrain, const SyntheticTerrai
   return {voxel_filter(a.points), voxel_filter(b.points), extract_features(a, {}, {}), extract_features(b, {}, {})};
 }
 
+// Sand waves 8 m apart: half the matches agree with the truth, the other half with the truth
+// shifted by one wavelength. The competitor is that second solution, with about half the
+// support; with random outliers instead, no distinct solution has more than chance support.
+TEST(AdaptiveRansac, ReportsAnAliasedSecondSolutionAndNoneWhereThereIsNone) {
+  const Eigen::Isometry3d truth = pose(3.2, -7.5, 12.0);
+  const Eigen::Isometry3d alias = pose(8.0, 0.0, 0.0) * truth;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> where(-25, 25), depth(8, 12);
+  std::normal_distribution<double> noise(0, 0.05);
+  auto matches = [&](bool aliased) {
+    std::vector<Eigen::Vector3d> source, target;
+    for (int i = 0; i < 80; ++i) {
+      const Eigen::Vector3d s(where(rng), where(rng), depth(rng));
+      const Eigen::Vector3d n(noise(rng), noise(rng), noise(rng));
+      source.push_back(s);
+      if (i % 2 == 0) target.push_back(truth * s + n);
+      else if (aliased) target.push_back(alias * s + n);
+      else target.emplace_back(where(rng), where(rng), depth(rng));
+    }
+    return std::pair{source, target};
+  };
+  const auto [source, target] = matches(true);
+  const RansacResult aliased = adaptive_ransac(source, target);
+  EXPECT_GE(aliased.inliers.size(), 38u);
+  EXPECT_GE(aliased.competitor_inliers, 34);
+  EXPECT_NEAR(aliased.competitor_separation_m, 8.0, 0.5);
+
+  const auto [clean_source, clean_target] = matches(false);
+  const RansacResult clean = adaptive_ransac(clean_source, clean_target);
+  EXPECT_LT((truth.inverse() * clean.source_to_target).translation().norm(), 0.1);
+  EXPECT_LT(clean.competitor_inliers, 8);
+}
+
 TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
   const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
   const Eigen::Isometry3d guess = pose(7.5, 2.8, 10.0) * Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0));

@@ -65,5 +65,32 @@ TEST(ErrorStats, KnownSeries) {
   EXPECT_NEAR(s.std, std::sqrt(6.25 - 1.75 * 1.75), 1e-12);
 }
 
+// A trajectory that is the reference turned by 2 degrees about a far point and shifted: no error
+// once aligned, metres of it unaligned; an error that no rotation explains stays.
+TEST(TrajectoryError, AlignmentRemovesARigidTurnButNotAShapeError) {
+  SubmapSet set;
+  std::vector<Eigen::Isometry3d> estimate;
+  const Eigen::Rotation2Dd turn(2.0 * M_PI / 180.0);
+  for (int i = 0; i < 40; ++i) {
+    Submap s;
+    s.index = i;
+    const Eigen::Vector2d truth(20.0 * (i % 20), 30.0 * (i / 20));
+    Eigen::Isometry3d reference = Eigen::Isometry3d::Identity();
+    reference.translation() << truth, -10.0;
+    s.reference_pose = reference;
+    set.submaps.push_back(s);
+    Eigen::Isometry3d moved = reference;
+    moved.translation().head<2>() = turn * (truth - Eigen::Vector2d(-500, 0)) + Eigen::Vector2d(-500, 0) + Eigen::Vector2d(3, -4);
+    estimate.push_back(moved);
+  }
+  EXPECT_GT(error_stats(trajectory_errors(set, estimate)).rmse, 5.0);
+  EXPECT_LT(error_stats(aligned_trajectory_errors(set, estimate)).max, 1e-6);
+
+  estimate[10].translation().x() += 4.0;  // one pose off the rigid shape
+  const ErrorStats aligned = error_stats(aligned_trajectory_errors(set, estimate));
+  EXPECT_GT(aligned.max, 3.0);
+  EXPECT_LT(aligned.max, 4.0 + 1e-6);
+}
+
 }  // namespace
 }  // namespace bathyslam

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# The robustness matrix (issue 14): every terrain kind x every drift model x seeds, each bundle
+# processed by every configuration; one markdown row per (terrain, drift, seed, configuration)
+# and, per `mchs` run, the checks the issue sets: never worse than odometry, no accepted loop
+# closure off by more than 2 m or 2 deg, no edge confidently wrong (beyond 6 sigma; fewer than
+# 1 % beyond 3 sigma).
+#   bench/robustness_matrix.sh [--scenario small] [--terrains "..."] [--drifts "..."]
+#                              [--seeds "1 2 3"] [--configs "odometry gicp mchs"] [--work DIR]
+#                              [--set "key=value ..."] [--tag NAME]
+# Bundles go under DIR (default /tmp/bathyslam-robust) and are reused when present; each bundle
+# is deleted after its runs unless --keep is given (a `small` bundle is ~60 MB).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scenario=small seeds="1 2 3" configs="odometry gicp mchs" work=/tmp/bathyslam-robust sets="" tag="" keep=0
+terrains="lake sandwaves boulders channel slopebreak flat mixed"
+drifts="paper dvl heading-walk compass-step"
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --scenario) scenario=$2; shift 2 ;;
+    --terrains) terrains=$2; shift 2 ;;
+    --drifts) drifts=$2; shift 2 ;;
+    --seeds) seeds=$2; shift 2 ;;
+    --configs) configs=$2; shift 2 ;;
+    --work) work=$2; shift 2 ;;
+    --set) sets=$2; shift 2 ;;
+    --tag) tag=-$2; shift 2 ;;
+    --keep) keep=1; shift ;;
+    *) echo "unknown option $1" >&2; exit 2 ;;
+  esac
+done
+bathyslam=${BATHYSLAM:-build/client/bathyslam}
+mkdir -p "$work"
+set_args=()
+for kv in $sets; do set_args+=(--set "$kv"); done
+
+echo "| terrain | drift | seed | config | trajectory RMSE (m) | aligned RMSE (m) | consistency RMSE (m) | p99 (m) | accepted | loops | worst loop (m, deg) | beyond 3σ / 6σ | safety net | time (s) | check |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+for terrain in $terrains; do
+  for drift in $drifts; do
+    for seed in $seeds; do
+      bundle=$work/$scenario-$terrain-$drift-$seed
+      [[ -f $bundle/survey.json ]] ||
+        "$bathyslam" simulate --scenario "$scenario" --terrain "$terrain" --drift "$drift" --seed "$seed" --out "$bundle" >/dev/null
+      reports=()
+      for config in $configs; do
+        out=$bundle-$config$tag
+        "$bathyslam" process "$bundle" --config "$config" --out "$out" "${set_args[@]}" >/dev/null
+        reports+=("$config=$out/report.json")
+      done
+      python3 bench/robustness_rows.py "$terrain" "$drift" "$seed" "${reports[@]}"
+      [[ $keep == 1 ]] || rm -rf "$bundle"
+    done
+  done
+done
