@@ -2,6 +2,9 @@
 
 #include <ceres/ceres.h>
 
+#include "core/graph/relative_pose_error.h"
+#include "core/graph/robust_kernel.h"
+
 namespace bathyslam {
 namespace {
 
@@ -13,11 +16,8 @@ Information6 square_root(const Information6& information) {
   return roots.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
-// Error of a relative-pose measurement between two nodes (position, unit quaternion), whitened
-// by the square root of its information. The error is expressed in `from`'s level frame (its
-// heading only, z up the true vertical), not its body frame: on flat ground a registration
-// observes depth but not where along the bottom it lies, and in a body frame tilted half a
-// degree a 20 m error along the bottom would show 0.17 m of it as "depth".
+// A relative-pose measurement between two nodes (position, unit quaternion) as a Ceres cost:
+// relative_pose_error whitened by the square root of its information.
 class RelativePoseCost {
  public:
   RelativePoseCost(const Eigen::Isometry3d& measured, const Eigen::Vector3d& anchor,
@@ -30,22 +30,11 @@ class RelativePoseCost {
   template <typename T>
   bool operator()(const T* p_a_ptr, const T* q_a_ptr, const T* p_b_ptr, const T* q_b_ptr,
                   T* residuals_ptr) const {
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(p_a_ptr), p_b(p_b_ptr);
-    Eigen::Map<const Eigen::Quaternion<T>> q_a(q_a_ptr), q_b(q_b_ptr);
-    const Eigen::Quaternion<T> q_a_inverse = q_a.conjugate();
-    const Eigen::Quaternion<T> q_ab = q_a_inverse * q_b;
-    const Eigen::Matrix<T, 3, 1> p_ab = q_a_inverse * (p_b - p_a);
-    const Eigen::Quaternion<T> delta_q = q_measured_.template cast<T>() * q_ab.conjugate();
-
-    // `from`'s tilt: its body frame turned to its level frame.
-    const T yaw = atan2(T(2) * (q_a.w() * q_a.z() + q_a.x() * q_a.y()),
-                        T(1) - T(2) * (q_a.y() * q_a.y() + q_a.z() * q_a.z()));
-    const Eigen::Quaternion<T> tilt = Eigen::Quaternion<T>(Eigen::AngleAxis<T>(-yaw, Eigen::Matrix<T, 3, 1>::UnitZ())) * q_a;
-
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(p_a_ptr), p_b(p_b_ptr);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_a(q_a_ptr), q_b(q_b_ptr);
     Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
-    residuals.template head<3>() = tilt * (q_ab * anchor_.template cast<T>() + p_ab - anchor_measured_.template cast<T>());
-    residuals.template tail<3>() = tilt * (T(2.0) * delta_q.vec());
-    residuals.applyOnTheLeft(sqrt_information_.template cast<T>());
+    residuals = sqrt_information_.template cast<T>() *
+                relative_pose_error<T>(p_a, q_a, p_b, q_b, anchor_, anchor_measured_, q_measured_);
     return true;
   }
 
@@ -63,6 +52,20 @@ class RelativePoseCost {
 };
 
 }  // namespace
+
+Eigen::Matrix<double, 6, 1> edge_error(const PoseGraphEdge& edge, const Eigen::Isometry3d& from,
+                                       const Eigen::Isometry3d& to) {
+  const Eigen::Vector3d p_a = from.translation(), p_b = to.translation();
+  const Eigen::Quaterniond q_a(from.rotation()), q_b(to.rotation());
+  return relative_pose_error<double>(p_a, q_a.normalized(), p_b, q_b.normalized(), edge.anchor,
+                                     edge.measured * edge.anchor,
+                                     Eigen::Quaterniond(edge.measured.rotation()).normalized());
+}
+
+Eigen::Matrix<double, 6, 1> whitened_residual(const PoseGraphEdge& edge, const Eigen::Isometry3d& from,
+                                              const Eigen::Isometry3d& to) {
+  return square_root(edge.information) * edge_error(edge, from, to);
+}
 
 Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
                                      const Eigen::Vector3d& rotation_rad) {
@@ -93,7 +96,7 @@ GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
   ceres::Problem problem;
   ceres::Manifold* quaternion_manifold = new ceres::EigenQuaternionManifold;
   for (const PoseGraphEdge& edge : edges) {
-    ceres::LossFunction* loss = edge.robust ? new ceres::HuberLoss(config.huber_delta) : nullptr;
+    ceres::LossFunction* loss = edge.robust ? registration_loss(config) : nullptr;
     problem.AddResidualBlock(RelativePoseCost::create(edge), loss, positions[edge.from].data(),
                              rotations[edge.from].coeffs().data(), positions[edge.to].data(),
                              rotations[edge.to].coeffs().data());

@@ -16,7 +16,7 @@ struct PoseGraphEdge {
   int to = 0;
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();
   Information6 information = Information6::Identity();
-  bool robust = false;  // Huber loss (registrations); odometry edges are trusted as Gaussian
+  bool robust = false;  // GraphConfig's robust kernel (registrations); odometry edges are trusted as Gaussian
   // The point of `to`'s frame (its own coordinates) where the translation is compared: a
   // registration pins down where the overlap lands far better than where `to`'s origin, tens of
   // metres away, lands; comparing at the overlap keeps a loose yaw from posing as a translation.
@@ -33,11 +33,22 @@ Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
 std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                           const Information6& information);
 
+// The loss on robust (registration) edges.
+enum class RobustKernel {
+  huber,  // a wrong edge keeps pulling, linearly in its error
+  dcs,    // dynamic covariance scaling: a wrong edge's pull fades as its error grows (robust_kernel.h)
+};
+
 struct GraphConfig {
   // Table 1 (c): DR noise, translation (5, 5, 1) m and rotation (1e-4, 1e-4, 1e-2) rad.
   Eigen::Vector3d dr_sigma_translation_m{5.0, 5.0, 1.0};
   Eigen::Vector3d dr_sigma_rotation_rad{1e-4, 1e-4, 1e-2};
+  RobustKernel robust_kernel = RobustKernel::huber;
   double huber_delta = 1.0;  // on whitened residuals
+  // DCS's Φ, on the squared whitened residual: below it an edge keeps its full weight. χ²₆ at
+  // 95 %, so a correct registration whose information is honest is left alone; Agarwal et al.'s
+  // Φ = 1 would already scale the typical correct edge (χ² ≈ 6) to a twelfth of its weight.
+  double dcs_phi = 12.59;
   int max_iterations = 200;
 };
 
@@ -48,6 +59,13 @@ struct GraphSolution {
   double initial_cost = 0;
   double final_cost = 0;
 };
+
+// The error of `edge` at node poses `from` and `to` (relative_pose_error.h: translation at the
+// anchor and rotation, in `from`'s level frame), unwhitened and whitened by its information.
+Eigen::Matrix<double, 6, 1> edge_error(const PoseGraphEdge& edge, const Eigen::Isometry3d& from,
+                                       const Eigen::Isometry3d& to);
+Eigen::Matrix<double, 6, 1> whitened_residual(const PoseGraphEdge& edge, const Eigen::Isometry3d& from,
+                                              const Eigen::Isometry3d& to);
 
 // Optimises `initial` (node poses in the map frame) under `edges`, with node 0 held fixed.
 GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
