@@ -8,12 +8,6 @@
 namespace bathyslam {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 Eigen::Matrix3d heading_rotation(const Eigen::Matrix3d& rotation) {
   const double yaw = std::atan2(rotation(1, 0), rotation(0, 0));
   return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -25,6 +19,12 @@ Eigen::Matrix3d range_sum(const std::vector<Eigen::Matrix3d>& prefix, int lo, in
 }
 
 }  // namespace
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
 
 Eigen::Isometry3d level_frame(const Eigen::Isometry3d& pose) {
   Eigen::Isometry3d level = Eigen::Isometry3d::Identity();
@@ -98,15 +98,19 @@ Covariance6 dr_relative_covariance(const std::vector<Eigen::Isometry3d>& dead_re
   return DrNoiseModel(dead_reckoning, config).covariance(from, to);
 }
 
-Covariance6 measurement_covariance(const PoseGraphEdge& edge, const Eigen::Isometry3d& from_pose,
-                                   double unobserved_variance) {
-  const Eigen::SelfAdjointEigenSolver<Information6> eigen(edge.information);
+Covariance6 covariance_from_information(const Information6& information, double unobserved_variance) {
+  const Eigen::SelfAdjointEigenSolver<Information6> eigen(information);
   Vector6 variances;
   for (int i = 0; i < 6; ++i) {
     const double lambda = eigen.eigenvalues()(i);
     variances(i) = lambda * unobserved_variance > 1.0 ? 1.0 / lambda : unobserved_variance;
   }
-  Covariance6 covariance = eigen.eigenvectors() * variances.asDiagonal() * eigen.eigenvectors().transpose();
+  return eigen.eigenvectors() * variances.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+Covariance6 measurement_covariance(const PoseGraphEdge& edge, const Eigen::Isometry3d& from_pose,
+                                   double unobserved_variance) {
+  Covariance6 covariance = covariance_from_information(edge.information, unobserved_variance);
 
   // The cost's error and this parametrisation's noise differ in the sign of the rotation part.
   const Vector6 signs = (Vector6() << 1, 1, 1, -1, -1, -1).finished();

@@ -18,6 +18,9 @@ namespace bathyslam {
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 using Covariance6 = Eigen::Matrix<double, 6, 6>;
 
+// [v]ₓ: [v]ₓ·w = v × w.
+Eigen::Matrix3d skew(const Eigen::Vector3d& v);
+
 // `pose` with its roll and pitch taken out: the same position, its heading only.
 Eigen::Isometry3d level_frame(const Eigen::Isometry3d& pose);
 
@@ -54,9 +57,12 @@ class DrNoiseModel {
 Covariance6 dr_relative_covariance(const std::vector<Eigen::Isometry3d>& dead_reckoning, int from, int to,
                                    const GraphConfig& config);
 
+// The inverse of `information`, with `unobserved_variance` (m² or rad²) along the directions it
+// leaves (near) zero: large enough to say nothing, finite so sums of covariances stay invertible.
+Covariance6 covariance_from_information(const Information6& information, double unobserved_variance = 1e4);
+
 // A measurement's error covariance in this parametrisation, from the information of its edge.
-// Directions the information leaves (near) zero get `unobserved_variance` (m² or rad²): large
-// enough to say nothing, finite so sums of covariances stay invertible. RelativePoseCost's error
+// Directions the information leaves (near) zero get `unobserved_variance`. RelativePoseCost's error
 // is estimate − measurement in translation and measurement − estimate in rotation, which flips
 // the sign of translation–rotation cross terms, and it compares translation at the edge's anchor:
 // both are converted here, to the pose of `to`'s origin. `from_pose` gives `from`'s tilt.

@@ -1,0 +1,83 @@
+#pragma once
+// loop_consistency: which loop closures to believe. Each must be one DR could have come to
+// (dr_noise.h), and together they must agree with one another: pairwise consistency
+// maximisation (PCM, Mangelson et al., ICRA 2018) keeps the largest set of loops every two of
+// which close a cycle through dead reckoning.
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/graph/dr_noise.h"
+#include "core/graph/pose_graph.h"
+
+namespace bathyslam {
+
+// A loop closure: `measured` is the pose of `to` in `from`'s level frame, `covariance` its
+// error's in dr_noise.h's parametrisation.
+struct LoopCandidate {
+  int from = 0;
+  int to = 0;
+  Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();
+  Covariance6 covariance = Covariance6::Identity();
+};
+
+// A registration edge as a loop candidate, its frames levelled at the nodes' DR poses and its
+// covariance from its information (measurement_covariance).
+LoopCandidate loop_candidate(const PoseGraphEdge& edge, const std::vector<Eigen::Isometry3d>& dead_reckoning);
+
+// Squared Mahalanobis distance (x, y, yaw) from identity of the cycle loop i closes with loop j:
+// a →(i) b →(DR) d →(j⁻¹) c →(DR) a, under the first-order covariance of both measurements and
+// both DR chains. The two chains are taken as independent. For loops running forward in time
+// (from < to; select_consistent_loops turns the others round) chains can share steps only
+// traversed in opposite directions, whose errors cancel, so the covariance is then too large
+// and the test errs towards calling loops consistent.
+double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr);
+
+// `loop` as the same measurement from `to` to `from`.
+LoopCandidate reversed(const LoopCandidate& loop);
+
+using Adjacency = std::vector<std::vector<char>>;  // symmetric, [i][j] != 0: an edge
+
+struct Clique {
+  std::vector<int> members;  // ascending
+  bool exact = true;         // false: the greedy heuristic's, or the search ran out of steps
+};
+
+// The largest clique: branch and bound with a colouring bound (Tomita's MCQ) for up to
+// `max_exact_vertices` vertices and `max_steps` branches; otherwise, or when the steps run out,
+// the best a greedy search found (from each vertex, repeatedly add the candidate of highest
+// degree that is adjacent to every member so far).
+Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices = 300, long max_steps = 2'000'000);
+
+struct LoopConsistencyConfig {
+  PlausibilityConfig plausibility;
+  // χ²₃ at 99.9 %, as for plausibility: a correct pair is called inconsistent once in a thousand,
+  // and one such refusal only costs a loop if its other partners cannot carry it into the clique.
+  double pair_chi2_threshold = 16.27;
+  // Exact search up to this many plausible loops (a few seconds at worst on a dense graph),
+  // greedy above; both also bounded by a branch budget.
+  int max_exact_loops = 300;
+  long max_branch_steps = 2'000'000;
+};
+
+enum class LoopVerdict {
+  kept,
+  implausible,   // refused by DR alone (plausibility)
+  inconsistent,  // plausible, but not in the largest consistent set
+};
+
+struct LoopSelection {
+  std::vector<LoopVerdict> verdicts;   // per candidate, in input order
+  std::vector<double> dr_mahalanobis2; // per candidate: its plausibility distance
+  std::vector<int> kept;               // candidates kept, ascending
+  bool exact = true;                   // the clique is proven largest
+};
+
+// Plausibility against DR for each loop, then the largest pairwise-consistent set of the
+// plausible ones. A lone plausible loop is kept: there is nothing to check it against, and DR
+// has already found it possible. Several plausible loops of which no two agree keep none:
+// each is contradicted and none confirmed.
+LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
+                                      const LoopConsistencyConfig& config = {});
+
+}  // namespace bathyslam
