@@ -37,10 +37,7 @@ class RelativePoseCost {
     const Eigen::Matrix<T, 3, 1> p_ab = q_a_inverse * (p_b - p_a);
     const Eigen::Quaternion<T> delta_q = q_measured_.template cast<T>() * q_ab.conjugate();
 
-    // `from`'s tilt: its body frame turned to its level frame.
-    const T yaw = atan2(T(2) * (q_a.w() * q_a.z() + q_a.x() * q_a.y()),
-                        T(1) - T(2) * (q_a.y() * q_a.y() + q_a.z() * q_a.z()));
-    const Eigen::Quaternion<T> tilt = Eigen::Quaternion<T>(Eigen::AngleAxis<T>(-yaw, Eigen::Matrix<T, 3, 1>::UnitZ())) * q_a;
+    const Eigen::Quaternion<T> tilt = level_from_body(Eigen::Quaternion<T>(q_a));
 
     Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
     residuals.template head<3>() = tilt * (q_ab * anchor_.template cast<T>() + p_ab - anchor_measured_.template cast<T>());
