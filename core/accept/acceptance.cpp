@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <utility>
 
 #include "core/types/format.h"
@@ -60,10 +61,24 @@ double overlap_points_weight(double points) {
   return piecewise<3>({{{500, 0.2}, {2000, 0.6}, {10000, 1.0}}}, points);
 }
 
-Information6 quality_information(const PairRegistration& r, const QualityConfig& config) {
+double quality_weight(const PairRegistration& r) {
   const RegistrationQuality& q = r.registration.quality;
-  const double weight = inlier_ratio_weight(r.inlier_ratio) * overlap_mse_weight(q.overlap_mse_m2) *
-                        overlap_points_weight(static_cast<double>(q.overlap_points));
+  return inlier_ratio_weight(r.inlier_ratio) * overlap_mse_weight(q.overlap_mse_m2) *
+         overlap_points_weight(static_cast<double>(q.overlap_points));
+}
+
+Information6 quality_information(const PairRegistration& r, const QualityConfig& config,
+                                 const Eigen::Matrix3d& level_from_target) {
+  const double weight = quality_weight(r);
+  if (config.information_from_hessian) {
+    if (r.hessian.correspondences == 0) {
+      throw std::invalid_argument("quality.information_from_hessian needs the registration's Hessian");
+    }
+    Eigen::Matrix<double, 6, 1> best_sigmas;
+    best_sigmas << config.best_sigma_translation_m, config.best_sigma_rotation_rad;
+    return observed_information(rotated(r.hessian, level_from_target), weight, best_sigmas, config.hessian_full_share,
+                                config.hessian_zero_share);
+  }
   Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
   if (r.path == RegistrationPath::kDirect) {
     for (int k : {0, 1, 5}) information(k, k) *= config.direct_horizontal_share;

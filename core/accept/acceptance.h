@@ -37,6 +37,16 @@ struct QualityConfig {
   // guess's error (metres to tens of metres) with a good residual. They constrain depth,
   // roll and pitch; the horizontal comes from dead reckoning and feature-aided edges.
   double direct_horizontal_share = 0.0;
+  // 1: the information's shape comes from what the registration observed, the GICP cost's
+  // Hessian (observed_information), instead of the diagonal above; direct_horizontal_share
+  // then no longer applies, the Hessian telling flat overlaps from textured ones itself. Needs
+  // the registration's Hessian (CoarseToFineConfig::hessian).
+  int information_from_hessian = 0;
+  // observed_information's shares: a direction with at least `hessian_full_share` of the
+  // best-observed one's (whitened) curvature is fully observed, one with less than
+  // `hessian_zero_share` not at all (sounding noise on a flat bottom reaches ~0.01).
+  double hessian_full_share = 0.03;
+  double hessian_zero_share = 0.012;
 };
 
 // Each factor in (0, 1], piecewise linear between the knots given in the README ("MCHS").
@@ -44,8 +54,15 @@ double inlier_ratio_weight(double inlier_ratio);
 double overlap_mse_weight(double mse_m2);
 double overlap_points_weight(double points);
 
-// Information = that of a perfect registration scaled by the three weights' product; on the
-// direct path the horizontal and yaw entries are further scaled by direct_horizontal_share.
-Information6 quality_information(const PairRegistration& r, const QualityConfig& config);
+// The three weights' product.
+double quality_weight(const PairRegistration& r);
+
+// Information = that of a perfect registration scaled by the quality weight; on the direct path
+// the horizontal and yaw entries are further scaled by direct_horizontal_share. With
+// information_from_hessian, the registration's Hessian shapes it instead (observed_information),
+// taken in the level frame of the target, which `level_from_target` turns the target's frame to
+// (level_from_body of the target's rotation): the edge's residual is taken there.
+Information6 quality_information(const PairRegistration& r, const QualityConfig& config,
+                                 const Eigen::Matrix3d& level_from_target = Eigen::Matrix3d::Identity());
 
 }  // namespace bathyslam

@@ -24,6 +24,16 @@ struct PoseGraphEdge {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
 };
 
+// The rotation taking a node's body-frame vectors to its level frame (the same heading, z up the
+// true vertical), in which an edge's residual is taken. `body_to_map`: the node's rotation.
+template <typename T>
+Eigen::Quaternion<T> level_from_body(const Eigen::Quaternion<T>& body_to_map) {
+  using std::atan2;
+  const Eigen::Quaternion<T>& q = body_to_map;
+  const T yaw = atan2(T(2) * (q.w() * q.z() + q.x() * q.y()), T(1) - T(2) * (q.y() * q.y() + q.z() * q.z()));
+  return Eigen::Quaternion<T>(Eigen::AngleAxis<T>(-yaw, Eigen::Matrix<T, 3, 1>::UnitZ())) * q;
+}
+
 // Diagonal information from standard deviations (metres, radians).
 Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
                                      const Eigen::Vector3d& rotation_rad);

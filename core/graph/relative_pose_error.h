@@ -6,6 +6,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/graph/pose_graph.h"
+
 namespace bathyslam {
 
 // Translation x, y, z then rotation about x, y, z, in `a`'s level frame (its heading only, z the
@@ -19,17 +21,12 @@ Eigen::Matrix<T, 6, 1> relative_pose_error(const Eigen::Matrix<T, 3, 1>& p_a, co
                                            const Eigen::Matrix<T, 3, 1>& p_b, const Eigen::Quaternion<T>& q_b,
                                            const Eigen::Vector3d& anchor, const Eigen::Vector3d& anchor_measured,
                                            const Eigen::Quaterniond& q_measured) {
-  using std::atan2;
   const Eigen::Quaternion<T> q_a_inverse = q_a.conjugate();
   const Eigen::Quaternion<T> q_ab = q_a_inverse * q_b;
   const Eigen::Matrix<T, 3, 1> p_ab = q_a_inverse * (p_b - p_a);
   const Eigen::Quaternion<T> delta_q = q_measured.template cast<T>() * q_ab.conjugate();
 
-  // `a`'s tilt: its body frame turned to its level frame.
-  const T yaw = atan2(T(2) * (q_a.w() * q_a.z() + q_a.x() * q_a.y()),
-                      T(1) - T(2) * (q_a.y() * q_a.y() + q_a.z() * q_a.z()));
-  const Eigen::Quaternion<T> tilt =
-      Eigen::Quaternion<T>(Eigen::AngleAxis<T>(-yaw, Eigen::Matrix<T, 3, 1>::UnitZ())) * q_a;
+  const Eigen::Quaternion<T> tilt = level_from_body(q_a);
 
   Eigen::Matrix<T, 6, 1> error;
   error.template head<3>() =

@@ -78,6 +78,9 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("quality.sigma_pitch_rad", c.quality.best_sigma_rotation_rad.y(), 1e-6, 10);
   visit("quality.sigma_yaw_rad", c.quality.best_sigma_rotation_rad.z(), 1e-6, 10);
   visit("quality.direct_horizontal_share", c.quality.direct_horizontal_share, 0, 1);
+  visit("quality.information_from_hessian", c.quality.information_from_hessian, 0, 1);
+  visit("quality.hessian_full_share", c.quality.hessian_full_share, 1e-6, 1);
+  visit("quality.hessian_zero_share", c.quality.hessian_zero_share, 0, 1);
   visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
   visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
   visit("batch_submaps", c.batch_submaps, 0, 1000000);
@@ -151,12 +154,16 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const uint64_t seed = config.registration.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
+  CoarseToFineConfig registration = config.registration;
+  registration.hessian = config.quality.information_from_hessian;  // the information needs it, nothing else does
   const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
-                                                       features[pair.source], guess, config.registration, seed);
+                                                       features[pair.source], guess, registration, seed);
   Constraint c = constraint_of(typed, reg, guess);
   c.reason = rejection_reason(reg, guess, config.acceptance, typed.type == ConstraintType::kLoop);
   c.accepted = c.reason.empty();
-  if (c.accepted) c.information = quality_information(reg, config.quality);
+  const Eigen::Matrix3d level_from_target =
+      level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
+  if (c.accepted) c.information = quality_information(reg, config.quality, level_from_target);
   return c;
 }
 

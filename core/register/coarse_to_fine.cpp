@@ -19,7 +19,7 @@ std::string to_string(RegistrationPath path) {
 }
 
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m) {
+                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian) {
   const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);
   const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);
   PairRegistration r;
@@ -31,6 +31,7 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
   if (target_overlap->size() < too_few || source_overlap->size() < too_few) return r;  // not converged, no overlap
   r.registration = register_gicp(target_overlap, source_overlap, guess, gicp);
   r.inlier_ratio = r.registration.quality.fitness;
+  if (with_hessian) r.hessian = gicp_hessian(*target_overlap, *source_overlap, r.registration.source_to_target, r.anchor, gicp);
   return r;
 }
 
@@ -39,7 +40,7 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
                                          const CoarseToFineConfig& config, uint64_t seed) {
   const double density = feature_density(target_features, source_features);
   auto direct = [&](std::string why) {
-    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m);
+    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m, config.hessian != 0);
     r.path = RegistrationPath::kDirect;
     r.why = std::move(why);
     r.feature_density = density;
@@ -71,7 +72,8 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
     refine.about_centroid = 1;
     refine.refine_correspondence_m = config.feature_refine_correspondence_m;
   }
-  PairRegistration r = register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m);
+  PairRegistration r =
+      register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m, config.hessian != 0);
   r.path = RegistrationPath::kFeatureAided;
   r.why = format("feature density %.4f >= %.4f", density, config.switching.min_feature_density) + ", " +
           std::to_string(matches.size()) + " matches";

@@ -9,6 +9,7 @@
 #include "core/matching/adaptive_ransac.h"
 #include "core/matching/feature_matching.h"
 #include "core/register/gicp.h"
+#include "core/register/registration_information.h"
 #include "core/submaps/submap.h"
 
 namespace bathyslam {
@@ -41,6 +42,10 @@ struct CoarseToFineConfig {
   // a few centimetres and a tenth of a degree instead of Table 1's ~0.2 m and ~0.8 deg
   // (gicp_test.cpp). 0: refine exactly as the direct path registers.
   double feature_refine_correspondence_m = 1.0;
+  // 1: also take the GICP cost's Hessian at the result (PairRegistration::hessian), for
+  // quality.information_from_hessian. It costs about as much again as the registration (one
+  // more pass of KD-trees and covariances), so it is off unless the information needs it.
+  int hessian = 0;
 };
 
 struct PairRegistration {
@@ -58,6 +63,9 @@ struct PairRegistration {
   Eigen::Isometry3d coarse = Eigen::Isometry3d::Identity();  // where GICP started
   Registration registration;
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // centroid of the source overlap, source frame
+  // Of the GICP cost at the result, about `anchor`, in the target frame; empty (no
+  // correspondences) unless asked for or without a registration.
+  GicpHessian hessian;
 };
 
 // `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC reproducible per pair.
@@ -65,8 +73,9 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
                                          const CoarseToFineConfig& config, uint64_t seed);
 
-// Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid.
+// Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid and, if
+// `with_hessian`, the cost's Hessian there.
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m);
+                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian = false);
 
 }  // namespace bathyslam

@@ -178,5 +178,31 @@ TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGive
   }
 }
 
+TEST(QualityWeights, FromTheHessianADirectEdgeKeepsWhatItsOverlapObserved) {
+  // No hand-set share: the flat pair's Hessian itself leaves x, y and yaw out.
+  QualityConfig config;
+  config.information_from_hessian = 1;
+  config.direct_horizontal_share = 1.0;
+  const Information6 best = information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
+  const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
+  auto shares = [&](const SyntheticTerrain& terrain) {
+    const PairClouds p = pair_of(terrain, terrain, truth);
+    const PairRegistration r = register_direct(*p.target, *p.source, truth, GicpConfig{}, 1.0, true);
+    EXPECT_GT(r.hessian.correspondences, 1000u);
+    const Information6 information = quality_information(r, config);
+    return Eigen::Matrix<double, 6, 1>(information.diagonal().cwiseQuotient(quality_weight(r) * best.diagonal()));
+  };
+  const Eigen::Matrix<double, 6, 1> flat = shares(SyntheticTerrain::flat());
+  for (int k : {0, 1, 5}) EXPECT_LT(flat(k), 1e-3) << "flat: x, y, yaw: axis " << k;
+  for (int k : {2, 3, 4}) EXPECT_GT(flat(k), 0.9) << "flat: z, roll, pitch: axis " << k;
+  const Eigen::Matrix<double, 6, 1> rough = shares(SyntheticTerrain::with_mounds(21));
+  for (int k = 0; k < 6; ++k) EXPECT_GT(rough(k), 0.2) << "mounds: axis " << k;
+
+  const PairClouds p = pair_of(SyntheticTerrain::flat(), SyntheticTerrain::flat(), truth);
+  const PairRegistration without = register_direct(*p.target, *p.source, truth, GicpConfig{}, 1.0);
+  EXPECT_EQ(without.hessian.correspondences, 0u) << "not computed unless asked for";
+  EXPECT_THROW(quality_information(without, config), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace bathyslam
