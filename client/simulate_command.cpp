@@ -1,6 +1,8 @@
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "client/commands.h"
@@ -15,8 +17,34 @@ struct SimulateOptions {
   uint64_t seed = 1;
   std::string drift = "paper";
   double sigma_yaw_rad = 0;
+  std::string terrain = "lake";
+  std::optional<double> line_spacing_m;
+  std::optional<double> wavelength_m;
+  std::optional<double> wave_angle_deg;
   std::string out;
 };
+
+void print_drift_model(const sim::SimulationConfig& config, const sim::Simulation& simulation,
+                       bool sigma_yaw_given) {
+  switch (config.drift) {
+    case sim::DriftModel::kPaper:
+      std::printf("  drift: paper model, sigma_t = %.3f m, sigma_yaw = %.3g rad per submap%s\n",
+                  config.paper_drift.sigma_translation_m, simulation.sigma_yaw_rad,
+                  sigma_yaw_given ? " (given)" : " (calibrated: mean DR error 17.5 m over lake)");
+      break;
+    case sim::DriftModel::kDvl:
+      std::printf("  drift: dvl model, ~0.3 %% of distance along a line\n");
+      break;
+    case sim::DriftModel::kHeadingWalk:
+      std::printf("  drift: heading-walk model, heading bias walk %.3g rad/sqrt(s)\n",
+                  config.heading_walk_drift.heading_bias_walk_rad_per_sqrt_s);
+      break;
+    case sim::DriftModel::kCompassStep:
+      std::printf("  drift: compass-step model, heading steps %+.2f deg at t = %.3f\n",
+                  simulation.compass_step->step_rad * 180.0 / M_PI, simulation.compass_step->time);
+      break;
+  }
+}
 
 void run_simulate(const SimulateOptions& o) {
   sim::SimulationConfig config;
@@ -24,6 +52,10 @@ void run_simulate(const SimulateOptions& o) {
   config.seed = o.seed;
   config.drift = sim::parse_drift_model(o.drift);
   config.paper_drift.sigma_yaw_rad = o.sigma_yaw_rad;
+  config.terrain.kind = sim::parse_terrain_kind(o.terrain);
+  config.terrain.sand_wavelength_fixed_m = o.wavelength_m;
+  config.terrain.sand_crest_angle_fixed_deg = o.wave_angle_deg;
+  config.line_spacing_m = o.line_spacing_m;
 
   const auto start = std::chrono::steady_clock::now();
   const sim::Simulation simulation = sim::simulate(config);
@@ -34,15 +66,13 @@ void run_simulate(const SimulateOptions& o) {
   const Survey& s = simulation.survey;
   std::printf("simulated %s (seed %llu) in %.1f s -> %s\n", o.scenario.c_str(),
               static_cast<unsigned long long>(o.seed), seconds, o.out.c_str());
+  if (o.terrain != "lake" || o.line_spacing_m) {
+    std::printf("  terrain %s, line spacing %g m\n", o.terrain.c_str(),
+                o.line_spacing_m.value_or(sim::default_line_spacing_m(config.scenario)));
+  }
   std::printf("  %zu pings, %zu soundings, %zu navigation samples\n", s.pings.size(),
               s.beams.size(), s.nav.size());
-  if (config.drift == sim::DriftModel::kPaper) {
-    std::printf("  drift: paper model, sigma_t = %.3f m, sigma_yaw = %.3g rad per submap%s\n",
-                config.paper_drift.sigma_translation_m, simulation.sigma_yaw_rad,
-                o.sigma_yaw_rad > 0 ? " (given)" : " (calibrated: mean DR error 17.5 m over lake)");
-  } else {
-    std::printf("  drift: dvl model, ~0.3 %% of distance along a line\n");
-  }
+  print_drift_model(config, simulation, o.sigma_yaw_rad > 0);
   std::printf("  DR error: mean %.2f m, rms %.2f m, max %.2f m, end %.2f m over %.0f m travelled\n",
               simulation.drift.mean_m, simulation.drift.rms_m, simulation.drift.max_m,
               simulation.drift.end_m, simulation.drift.distance_travelled_m);
@@ -58,9 +88,24 @@ void add_simulate_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", options->seed, "random seed (same seed, same bytes)")
       ->capture_default_str();
-  cmd->add_option("--drift", options->drift, "dead-reckoning drift model: paper or dvl")
-      ->check(CLI::IsMember({"paper", "dvl"}))
+  cmd->add_option("--drift", options->drift,
+                  "dead-reckoning drift model: paper, dvl, heading-walk or compass-step")
+      ->check(CLI::IsMember({"paper", "dvl", "heading-walk", "compass-step"}))
       ->capture_default_str();
+  cmd->add_option("--terrain", options->terrain,
+                  "seabed: lake, sandwaves, boulders, channel, slopebreak, flat or mixed")
+      ->check(CLI::IsMember({"lake", "sandwaves", "boulders", "channel", "slopebreak", "flat", "mixed"}))
+      ->capture_default_str();
+  cmd->add_option("--line-spacing", options->line_spacing_m,
+                  "metres between lawnmower lines (default: the scenario's 30 m)")
+      ->check(CLI::Range(5.0, 200.0));
+  cmd->add_option("--wavelength", options->wavelength_m,
+                  "sandwaves: the dominant wavelength in m (default: drawn from 8-40 m)")
+      ->check(CLI::Range(2.0, 200.0));
+  cmd->add_option("--wave-angle", options->wave_angle_deg,
+                  "sandwaves: crest direction in degrees counter-clockwise from east "
+                  "(default: drawn 20-70 deg either side of east)")
+      ->check(CLI::Range(-180.0, 180.0));
   cmd->add_option("--sigma-yaw", options->sigma_yaw_rad,
                   "paper model: yaw noise per submap in rad (default: calibrated)")
       ->check(CLI::PositiveNumber);

@@ -1,6 +1,7 @@
 #pragma once
 // Dead reckoning that drifts away from the true navigation (design.md, "Drift, two models").
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/types/survey.h"
@@ -25,6 +26,32 @@ struct DvlDrift {
   double velocity_noise_m_s = 0.01;
 };
 
+// dvl's sensors but a heading bias that wanders by degrees over a survey, as a poorly aided gyro
+// does: tens of metres of DR error on `lake` (README), beyond what registration corrects from a
+// dead-reckoning guess.
+DvlDrift make_heading_walk_drift();
+
+// dvl with a compass fault: at one moment in the middle half of the survey the heading reading
+// jumps by a few degrees and stays off, so the dead-reckoned track turns about that point.
+struct CompassStepDrift {
+  DvlDrift dvl;
+  double min_step_deg = 3.0;
+  double max_step_deg = 8.0;
+  // The fault's time, as fractions of the navigation's span: survey on both sides of it.
+  double earliest = 0.25;
+  double latest = 0.75;
+};
+
+// A jump of the heading error from `time` on (its sign random).
+struct HeadingStep {
+  double time = 0;
+  double step_rad = 0;
+};
+
+// The fault of a compass-step survey, drawn from the seed: the same for the same seed.
+HeadingStep draw_compass_step(const std::vector<NavSample>& truth, const CompassStepDrift& drift,
+                              uint64_t seed);
+
 // The mean DR error (over poses, averaged over seeds) that the paper reports for its survey.
 inline constexpr double kPaperMeanDrError_m = 17.53;
 
@@ -37,8 +64,10 @@ double calibrated_paper_sigma_yaw();
 std::vector<NavSample> apply_paper_drift(const std::vector<NavSample>& truth, double key_time,
                                          const PaperDrift& drift, uint64_t seed);
 
+// With `step`, the heading error jumps at its time; the drift before it is dvl's for the seed.
 std::vector<NavSample> apply_dvl_drift(const std::vector<NavSample>& truth, const DvlDrift& drift,
-                                       uint64_t seed);
+                                       uint64_t seed,
+                                       std::optional<HeadingStep> step = std::nullopt);
 
 // Horizontal position error of `nav` against `reference`, sample by sample (same times).
 struct DriftStats {

@@ -24,6 +24,7 @@ enum Stream : uint64_t {
   kSonarNoiseStream = 2,
   kDriftStream = 3,
   kAttitudeStream = 4,
+  kCompassStepStream = 5,
 };
 
 }  // namespace bathyslam::sim

@@ -1,6 +1,7 @@
 #include "core/sim/simulator.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "core/sim/random.h"
@@ -21,15 +22,100 @@ std::size_t steps_per(double interval_s, double step_s) {
   return n;
 }
 
+// A survey's name says how it differs from its scenario's default: terrain and line spacing
+// appear only when not the default, so default surveys keep their names.
+std::string survey_name(const SimulationConfig& config, double line_spacing_m) {
+  std::string name = to_string(config.scenario) + "-seed" + std::to_string(config.seed) + "-" +
+                     to_string(config.drift);
+  if (config.terrain.kind != TerrainKind::kLake) name += "-" + to_string(config.terrain.kind);
+  if (line_spacing_m != default_line_spacing_m(config.scenario)) {
+    char spacing[32];
+    std::snprintf(spacing, sizeof spacing, "-spacing%gm", line_spacing_m);
+    name += spacing;
+  }
+  return name;
+}
+
+nlohmann::json terrain_json(const TerrainConfig& terrain) {
+  nlohmann::json json = {{"kind", to_string(terrain.kind)}};
+  if (terrain.sand_wavelength_fixed_m) json["sand_wavelength_m"] = *terrain.sand_wavelength_fixed_m;
+  if (terrain.sand_crest_angle_fixed_deg) json["sand_crest_angle_deg"] = *terrain.sand_crest_angle_fixed_deg;
+  return json;
+}
+
+nlohmann::json dvl_json(const DvlDrift& drift) {
+  return {{"scale_sigma", drift.scale_sigma},
+          {"heading_bias_sigma_rad", drift.heading_bias_sigma_rad},
+          {"heading_bias_walk_rad_per_sqrt_s", drift.heading_bias_walk_rad_per_sqrt_s},
+          {"velocity_noise_m_s", drift.velocity_noise_m_s}};
+}
+
+// The drift model's parameters, and a compass fault's time and size: what the bundle's dead
+// reckoning was made with.
+nlohmann::json drift_json(const SimulationConfig& config, const Simulation& sim) {
+  nlohmann::json json = {{"model", to_string(config.drift)}, {"seed", config.seed}};
+  switch (config.drift) {
+    case DriftModel::kPaper:
+      json["sigma_translation_m"] = config.paper_drift.sigma_translation_m;
+      json["sigma_yaw_rad"] = sim.sigma_yaw_rad;
+      break;
+    case DriftModel::kDvl: json.update(dvl_json(config.dvl_drift)); break;
+    case DriftModel::kHeadingWalk: json.update(dvl_json(config.heading_walk_drift)); break;
+    case DriftModel::kCompassStep: {
+      const CompassStepDrift& d = config.compass_step_drift;
+      json.update(dvl_json(d.dvl));
+      json["compass_step"] = {{"min_step_deg", d.min_step_deg},
+                              {"max_step_deg", d.max_step_deg},
+                              {"earliest_fraction", d.earliest},
+                              {"latest_fraction", d.latest},
+                              {"time", sim.compass_step->time},
+                              {"step_deg", sim.compass_step->step_rad * 180.0 / M_PI}};
+      break;
+    }
+  }
+  return json;
+}
+
+// Dead reckoning from the truth by the configured model; records what the model drew.
+std::vector<NavSample> dead_reckoning(const SimulationConfig& config,
+                                      const std::vector<NavSample>& truth, double first_ping_time,
+                                      Simulation& sim) {
+  switch (config.drift) {
+    case DriftModel::kPaper: {
+      PaperDrift drift = config.paper_drift;
+      if (drift.sigma_yaw_rad <= 0) drift.sigma_yaw_rad = calibrated_paper_sigma_yaw();
+      sim.sigma_yaw_rad = drift.sigma_yaw_rad;
+      return apply_paper_drift(truth, first_ping_time, drift, config.seed);
+    }
+    case DriftModel::kDvl: return apply_dvl_drift(truth, config.dvl_drift, config.seed);
+    case DriftModel::kHeadingWalk: return apply_dvl_drift(truth, config.heading_walk_drift, config.seed);
+    case DriftModel::kCompassStep:
+      sim.compass_step = draw_compass_step(truth, config.compass_step_drift, config.seed);
+      return apply_dvl_drift(truth, config.compass_step_drift.dvl, config.seed, sim.compass_step);
+  }
+  throw std::invalid_argument("unknown drift model");
+}
+
 }  // namespace
 
 DriftModel parse_drift_model(const std::string& name) {
-  if (name == "paper") return DriftModel::kPaper;
-  if (name == "dvl") return DriftModel::kDvl;
-  throw std::invalid_argument("unknown drift model '" + name + "' (expected paper or dvl)");
+  for (DriftModel model : {DriftModel::kPaper, DriftModel::kDvl, DriftModel::kHeadingWalk,
+                           DriftModel::kCompassStep}) {
+    if (to_string(model) == name) return model;
+  }
+  throw std::invalid_argument("unknown drift model '" + name +
+                              "' (expected paper, dvl, heading-walk or compass-step)");
 }
 
-std::string to_string(DriftModel model) { return model == DriftModel::kPaper ? "paper" : "dvl"; }
+std::string to_string(DriftModel model) {
+  switch (model) {
+    case DriftModel::kPaper: return "paper";
+    case DriftModel::kDvl: return "dvl";
+    case DriftModel::kHeadingWalk: return "heading-walk";
+    case DriftModel::kCompassStep: return "compass-step";
+  }
+  return "?";
+}
 
 Simulation simulate(const SimulationConfig& config) {
   MotionConfig motion = config.motion;
@@ -37,7 +123,10 @@ Simulation simulate(const SimulationConfig& config) {
   TerrainConfig terrain_config = config.terrain;
   terrain_config.seed = config.seed;
 
-  const std::vector<LineSpec> lines = survey_pattern(config.scenario);
+  const double line_spacing_m =
+      config.line_spacing_m.value_or(default_line_spacing_m(config.scenario));
+  motion.turn_radius_m = lawnmower_turn_radius_m(line_spacing_m);
+  const std::vector<LineSpec> lines = survey_pattern(config.scenario, line_spacing_m);
   const std::vector<VehicleState> states = drive(lines, motion);
   // Half a swath either side of the lines, plus room for turns.
   const double margin = 40.0 + 2.0 * terrain_config.mean_depth_m;
@@ -45,8 +134,7 @@ Simulation simulate(const SimulationConfig& config) {
   sim.terrain = Terrain::generate(terrain_config, pattern_area(lines, margin));
 
   Survey& survey = sim.survey;
-  survey.metadata.name = to_string(config.scenario) + "-seed" + std::to_string(config.seed) +
-                         "-" + to_string(config.drift);
+  survey.metadata.name = survey_name(config, line_spacing_m);
   survey.metadata.crs = config.crs;
 
   // Navigation at its rate from the first step; pings at theirs, offset by one step so ping
@@ -79,14 +167,7 @@ Simulation simulate(const SimulationConfig& config) {
     std::vector<Beam>().swap(beams_per_ping[k]);
   }
 
-  if (config.drift == DriftModel::kPaper) {
-    PaperDrift drift = config.paper_drift;
-    if (drift.sigma_yaw_rad <= 0) drift.sigma_yaw_rad = calibrated_paper_sigma_yaw();
-    sim.sigma_yaw_rad = drift.sigma_yaw_rad;
-    survey.nav = apply_paper_drift(truth, survey.pings.front().time, drift, config.seed);
-  } else {
-    survey.nav = apply_dvl_drift(truth, config.dvl_drift, config.seed);
-  }
+  survey.nav = dead_reckoning(config, truth, survey.pings.front().time, sim);
   sim.drift = drift_stats(survey.nav, truth);
   survey.reference_nav = std::move(truth);
 
@@ -97,23 +178,20 @@ Simulation simulate(const SimulationConfig& config) {
                            {"ping_rate_hz", s.ping_rate_hz},
                            {"range_noise", {{"base_m", s.noise_base_m},
                                             {"depth_fraction", s.noise_depth_fraction}}}};
-  nlohmann::json drift_json = {{"model", to_string(config.drift)}, {"seed", config.seed}};
-  if (config.drift == DriftModel::kPaper) {
-    drift_json["sigma_translation_m"] = config.paper_drift.sigma_translation_m;
-    drift_json["sigma_yaw_rad"] = sim.sigma_yaw_rad;
-  } else {
-    drift_json["scale_sigma"] = config.dvl_drift.scale_sigma;
-    drift_json["heading_bias_sigma_rad"] = config.dvl_drift.heading_bias_sigma_rad;
-    drift_json["heading_bias_walk_rad_per_sqrt_s"] = config.dvl_drift.heading_bias_walk_rad_per_sqrt_s;
-    drift_json["velocity_noise_m_s"] = config.dvl_drift.velocity_noise_m_s;
-  }
   survey.metadata.vehicle = {{"model", "simulated AUV"},
                              {"speed_m_s", motion.speed_m_s},
                              {"depth_m", motion.vehicle_depth_m},
                              {"navigation", "dead reckoning (simulated drift)"},
                              {"simulation", {{"scenario", to_string(config.scenario)},
                                              {"seed", config.seed},
-                                             {"drift", drift_json}}}};
+                                             {"drift", drift_json(config, sim)}}}};
+  // Recorded when not the default, as in the name, so default surveys keep their bytes.
+  nlohmann::json& simulation = survey.metadata.vehicle["simulation"];
+  if (config.terrain.kind != TerrainKind::kLake) simulation["terrain"] = terrain_json(config.terrain);
+  if (line_spacing_m != default_line_spacing_m(config.scenario)) {
+    simulation["line_spacing_m"] = line_spacing_m;
+    simulation["turn_radius_m"] = motion.turn_radius_m;
+  }
   return sim;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // `bathyslam simulate`: a survey with known truth, deterministic from its seed.
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "core/sim/drift.h"
@@ -11,7 +12,7 @@
 
 namespace bathyslam::sim {
 
-enum class DriftModel { kPaper, kDvl };
+enum class DriftModel { kPaper, kDvl, kHeadingWalk, kCompassStep };
 DriftModel parse_drift_model(const std::string& name);  // throws std::invalid_argument
 std::string to_string(DriftModel model);
 
@@ -21,7 +22,10 @@ struct SimulationConfig {
   DriftModel drift = DriftModel::kPaper;
   PaperDrift paper_drift;
   DvlDrift dvl_drift;
+  DvlDrift heading_walk_drift = make_heading_walk_drift();
+  CompassStepDrift compass_step_drift;
   TerrainConfig terrain;  // its seed is replaced by `seed`
+  std::optional<double> line_spacing_m;  // the scenario's when unset
   MotionConfig motion;    // its seed is replaced by `seed`
   SonarConfig sonar;
   double nav_rate_hz = 20.0;
@@ -33,7 +37,8 @@ struct SimulationConfig {
 struct Simulation {
   Survey survey;  // nav = dead reckoning, reference_nav = truth
   Terrain terrain;
-  double sigma_yaw_rad = 0;  // the paper model's sigma_yaw used (0 for dvl)
+  double sigma_yaw_rad = 0;  // the paper model's sigma_yaw used (0 for the others)
+  std::optional<HeadingStep> compass_step;  // the compass-step model's fault
   DriftStats drift;
 };
 

@@ -2,47 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
+#include "core/sim/noise.h"
 #include "core/sim/random.h"
+#include "core/sim/seabed.h"
 
 namespace bathyslam::sim {
 namespace {
 
 constexpr double kMarginM = 60.0;
 
-double smoothstep(double edge0, double edge1, double x) {
-  const double t = std::clamp((x - edge0) / (edge1 - edge0), 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
-}
-
-// Random values on a square lattice, interpolated smoothly: the building block of the relief.
-class ValueNoise {
- public:
-  ValueNoise(const Area& area, double spacing_m, double sigma, std::mt19937_64& rng)
-      : origin_(area.min), spacing_(spacing_m) {
-    cols_ = static_cast<int>(std::ceil((area.max.x() - area.min.x()) / spacing_m)) + 2;
-    rows_ = static_cast<int>(std::ceil((area.max.y() - area.min.y()) / spacing_m)) + 2;
-    std::normal_distribution<double> normal(0.0, sigma);
-    values_.resize(static_cast<std::size_t>(cols_) * rows_);
-    for (double& v : values_) v = normal(rng);
-  }
-
-  double operator()(double x, double y) const {
-    const double u = std::clamp((x - origin_.x()) / spacing_, 0.0, cols_ - 1.001);
-    const double v = std::clamp((y - origin_.y()) / spacing_, 0.0, rows_ - 1.001);
-    const int i = static_cast<int>(u), j = static_cast<int>(v);
-    const double fu = smoothstep(0, 1, u - i), fv = smoothstep(0, 1, v - j);
-    auto at = [&](int a, int b) { return values_[static_cast<std::size_t>(b) * cols_ + a]; };
-    return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
-           fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
-  }
-
- private:
-  Eigen::Vector2d origin_;
-  double spacing_;
-  int cols_ = 0, rows_ = 0;
-  std::vector<double> values_;
-};
+constexpr TerrainKind kTerrainKinds[] = {TerrainKind::kLake,       TerrainKind::kSandWaves,
+                                         TerrainKind::kBoulders,   TerrainKind::kChannel,
+                                         TerrainKind::kSlopeBreak, TerrainKind::kFlat,
+                                         TerrainKind::kMixed};
 
 // An elongated Gaussian bump (ridge, or channel with negative height) or a round one (mound,
 // where half_length is 0).
@@ -93,6 +67,27 @@ std::vector<Feature> scatter_features(const TerrainConfig& config, const Area& a
 
 }  // namespace
 
+TerrainKind parse_terrain_kind(const std::string& name) {
+  for (TerrainKind kind : kTerrainKinds) {
+    if (to_string(kind) == name) return kind;
+  }
+  throw std::invalid_argument("unknown terrain '" + name +
+                              "' (expected lake, sandwaves, boulders, channel, slopebreak, flat or mixed)");
+}
+
+std::string to_string(TerrainKind kind) {
+  switch (kind) {
+    case TerrainKind::kLake: return "lake";
+    case TerrainKind::kSandWaves: return "sandwaves";
+    case TerrainKind::kBoulders: return "boulders";
+    case TerrainKind::kChannel: return "channel";
+    case TerrainKind::kSlopeBreak: return "slopebreak";
+    case TerrainKind::kFlat: return "flat";
+    case TerrainKind::kMixed: return "mixed";
+  }
+  return "?";
+}
+
 Terrain Terrain::generate(const TerrainConfig& config, const Area& area) {
   Terrain t;
   t.area_ = {area.min.array() - kMarginM, area.max.array() + kMarginM};
@@ -106,61 +101,90 @@ Terrain Terrain::generate(const TerrainConfig& config, const Area& area) {
     t.max_slope_ = 0.0;
     return t;
   }
+  if (config.kind == TerrainKind::kLake) {
+    t.sample_lake(config);
+  } else {
+    t.sample_seabed(config, area);
+  }
+  t.max_slope_ = t.steepest_slope();
+  return t;
+}
 
+void Terrain::sample_lake(const TerrainConfig& config) {
+  const std::size_t cells = elevation_.size();
   auto rng = make_rng(config.seed, kTerrainStream);
   // Rough and flat regions: a checkerboard of region-sized cells with some squares flipped, so
   // the pattern alternates but is not regular; smoothed into transitions a few tens of metres wide.
-  const ValueNoise region_jitter(t.area_, config.region_size_m, 0.25, rng);
+  const ValueNoise region_jitter(area_, config.region_size_m, 0.25, rng);
   auto region_weight = [&](double x, double y) {
-    const double u = (x - t.area_.min.x()) / config.region_size_m;
-    const double v = (y - t.area_.min.y()) / config.region_size_m;
+    const double u = (x - area_.min.x()) / config.region_size_m;
+    const double v = (y - area_.min.y()) / config.region_size_m;
     const double checker = 0.5 + 0.5 * std::sin(M_PI * u) * std::sin(M_PI * v);
     return smoothstep(0.35, 0.65, checker + region_jitter(x, y));
   };
-  const ValueNoise regional(t.area_, 250.0, config.regional_relief_m, rng);
-  const ValueNoise fine_coarse(t.area_, 3.0, config.fine_roughness_m, rng);
-  const ValueNoise fine_detail(t.area_, 1.2, 0.5 * config.fine_roughness_m, rng);
+  const ValueNoise regional(area_, 250.0, config.regional_relief_m, rng);
+  const ValueNoise fine_coarse(area_, 3.0, config.fine_roughness_m, rng);
+  const ValueNoise fine_detail(area_, 1.2, 0.5 * config.fine_roughness_m, rng);
   std::normal_distribution<float> sediment(0.0f, static_cast<float>(config.flat_roughness_m));
 
   // Relief of the rough regions before weighting: features splatted over their reach.
   std::vector<float> relief(cells, 0.0f);
-  for (const Feature& f : scatter_features(config, t.area_, rng)) {
+  for (const Feature& f : scatter_features(config, area_, rng)) {
     const double r = f.reach();
-    const int i0 = std::max(0, static_cast<int>((f.centre.x() - r - t.area_.min.x()) / t.cell_m_));
-    const int i1 = std::min(t.cols_ - 1, static_cast<int>((f.centre.x() + r - t.area_.min.x()) / t.cell_m_));
-    const int j0 = std::max(0, static_cast<int>((f.centre.y() - r - t.area_.min.y()) / t.cell_m_));
-    const int j1 = std::min(t.rows_ - 1, static_cast<int>((f.centre.y() + r - t.area_.min.y()) / t.cell_m_));
+    const int i0 = std::max(0, static_cast<int>((f.centre.x() - r - area_.min.x()) / cell_m_));
+    const int i1 = std::min(cols_ - 1, static_cast<int>((f.centre.x() + r - area_.min.x()) / cell_m_));
+    const int j0 = std::max(0, static_cast<int>((f.centre.y() - r - area_.min.y()) / cell_m_));
+    const int j1 = std::min(rows_ - 1, static_cast<int>((f.centre.y() + r - area_.min.y()) / cell_m_));
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
-        const Eigen::Vector2d p(t.area_.min.x() + i * t.cell_m_, t.area_.min.y() + j * t.cell_m_);
-        relief[static_cast<std::size_t>(j) * t.cols_ + i] += static_cast<float>(f(p));
+        const Eigen::Vector2d p(area_.min.x() + i * cell_m_, area_.min.y() + j * cell_m_);
+        relief[static_cast<std::size_t>(j) * cols_ + i] += static_cast<float>(f(p));
       }
     }
   }
 
-  for (int j = 0; j < t.rows_; ++j) {
-    for (int i = 0; i < t.cols_; ++i) {
-      const double x = t.area_.min.x() + i * t.cell_m_, y = t.area_.min.y() + j * t.cell_m_;
-      const std::size_t c = static_cast<std::size_t>(j) * t.cols_ + i;
+  for (int j = 0; j < rows_; ++j) {
+    for (int i = 0; i < cols_; ++i) {
+      const double x = area_.min.x() + i * cell_m_, y = area_.min.y() + j * cell_m_;
+      const std::size_t c = static_cast<std::size_t>(j) * cols_ + i;
       const double w = region_weight(x, y);
       const double rough = relief[c] + fine_coarse(x, y) + fine_detail(x, y);
-      t.roughness_[c] = static_cast<float>(w);
-      t.elevation_[c] = static_cast<float>(-config.mean_depth_m + regional(x, y) + w * rough) +
+      roughness_[c] = static_cast<float>(w);
+      elevation_[c] = static_cast<float>(-config.mean_depth_m + regional(x, y) + w * rough) +
                         sediment(rng);
     }
   }
+}
 
-  // Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
-  float steepest = 0;
-  for (int j = 0; j + 1 < t.rows_; ++j) {
-    for (int i = 0; i + 1 < t.cols_; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * t.cols_ + i;
-      steepest = std::max({steepest, std::abs(t.elevation_[c + 1] - t.elevation_[c]),
-                           std::abs(t.elevation_[c + t.cols_] - t.elevation_[c])});
+void Terrain::sample_seabed(const TerrainConfig& config, const Area& area) {
+  auto rng = make_rng(config.seed, kTerrainStream);
+  const std::unique_ptr<Seabed> seabed = make_seabed(config.kind, config, area, rng);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int j = 0; j < rows_; ++j) {
+    for (int i = 0; i < cols_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * cols_ + i;
+      const Ground g = seabed->at({area_.min.x() + i * cell_m_, area_.min.y() + j * cell_m_});
+      roughness_[c] = static_cast<float>(g.roughness);
+      elevation_[c] = static_cast<float>(-config.mean_depth_m + g.height);
     }
   }
-  t.max_slope_ = 2.0 * steepest / t.cell_m_;
-  return t;
+  // Sediment texture drawn in grid order, apart from the parallel loop: the same bytes whatever
+  // the thread count.
+  std::normal_distribution<float> sediment(0.0f, static_cast<float>(config.flat_roughness_m));
+  for (float& e : elevation_) e += sediment(rng);
+}
+
+// Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
+double Terrain::steepest_slope() const {
+  float steepest = 0;
+  for (int j = 0; j + 1 < rows_; ++j) {
+    for (int i = 0; i + 1 < cols_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * cols_ + i;
+      steepest = std::max({steepest, std::abs(elevation_[c + 1] - elevation_[c]),
+                           std::abs(elevation_[c + cols_] - elevation_[c])});
+    }
+  }
+  return 2.0 * steepest / cell_m_;
 }
 
 double Terrain::sample(const std::vector<float>& grid, double x, double y) const {

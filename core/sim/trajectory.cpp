@@ -12,6 +12,7 @@ namespace bathyslam::sim {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+constexpr double kMinTurnRadiusM = 10.0;  // a small survey AUV's tightest turn at 2 m/s
 
 struct PatternSize {
   int lines;
@@ -33,6 +34,19 @@ PatternSize pattern_size(Scenario scenario) {
   throw std::invalid_argument("unknown scenario");
 }
 
+double block_height_m(const PatternSize& size) { return (size.lines - 1) * size.spacing_m; }
+
+PatternSize pattern_size(Scenario scenario, std::optional<double> line_spacing_m) {
+  PatternSize size = pattern_size(scenario);
+  if (!line_spacing_m) return size;
+  if (!(*line_spacing_m > 0)) throw std::invalid_argument("line spacing must be positive");
+  // Check lines overhang the block as much as at the scenario's spacing.
+  const double overhang_m = size.check_length_m - block_height_m(size);
+  size.spacing_m = *line_spacing_m;
+  size.check_length_m = block_height_m(size) + overhang_m;
+  return size;
+}
+
 }  // namespace
 
 Scenario parse_scenario(const std::string& name) {
@@ -51,15 +65,21 @@ std::string to_string(Scenario scenario) {
   return "?";
 }
 
-std::vector<LineSpec> survey_pattern(Scenario scenario) {
-  const PatternSize size = pattern_size(scenario);
+double default_line_spacing_m(Scenario scenario) { return pattern_size(scenario).spacing_m; }
+
+double lawnmower_turn_radius_m(double line_spacing_m) {
+  return std::max(kMinTurnRadiusM, 0.5 * line_spacing_m);
+}
+
+std::vector<LineSpec> survey_pattern(Scenario scenario, std::optional<double> line_spacing_m) {
+  const PatternSize size = pattern_size(scenario, line_spacing_m);
   std::vector<LineSpec> lines;
   for (int i = 0; i < size.lines; ++i) {
     const double y = i * size.spacing_m;
     const Eigen::Vector2d west(0.0, y), east(size.line_length_m, y);
     lines.push_back(i % 2 == 0 ? LineSpec{west, east} : LineSpec{east, west});
   }
-  const double block_height = (size.lines - 1) * size.spacing_m;
+  const double block_height = block_height_m(size);
   const double south = 0.5 * (block_height - size.check_length_m);
   const double north = south + size.check_length_m;
   // Check lines start next to where the lawnmower block ends (its north-east or north-west

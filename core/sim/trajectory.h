@@ -2,6 +2,7 @@
 // The survey pattern of a scenario and the vehicle driving it: straight survey lines joined by
 // turns, sampled at a fixed step so that pings and navigation take exact true states.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,12 +24,21 @@ struct LineSpec {
 };
 
 // Lawnmower lines (east-west, alternating direction) then check lines (north-south) crossing
-// them, in the local map frame with the first line starting at the origin.
-std::vector<LineSpec> survey_pattern(Scenario scenario);
+// them, in the local map frame with the first line starting at the origin. Another line spacing
+// keeps the number of lines and stretches the check lines with the block, so they still cross
+// all of it.
+std::vector<LineSpec> survey_pattern(Scenario scenario,
+                                     std::optional<double> line_spacing_m = std::nullopt);
+
+double default_line_spacing_m(Scenario scenario);
+
+// Half the line spacing, so lawnmower turns are semicircles, but no tighter than the vehicle can
+// turn; below twice that the Dubins path loops out to make the turn.
+double lawnmower_turn_radius_m(double line_spacing_m);
 
 struct MotionConfig {
   double speed_m_s = 2.0;
-  double turn_radius_m = 15.0;  // half the line spacing: lawnmower turns are semicircles
+  double turn_radius_m = 15.0;  // lawnmower_turn_radius_m of the scenarios' 30 m spacing
   double vehicle_depth_m = 1.0;
   double run_in_m = 20.0;       // straight run before the first line
   double step_s = 0.025;     // state sampling; pings and nav take every few steps

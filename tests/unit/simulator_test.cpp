@@ -73,6 +73,14 @@ TEST_F(SmallScenario, BundleReadsBackValid) {
   fs::remove_all(dir);
 }
 
+TEST_F(SmallScenario, DefaultSurveyRecordsNoTerrainOrSpacing) {
+  // Recorded only when not the default, so default surveys keep their bytes.
+  const nlohmann::json& simulation = simulation_->survey.metadata.vehicle["simulation"];
+  EXPECT_FALSE(simulation.contains("terrain"));
+  EXPECT_FALSE(simulation.contains("line_spacing_m"));
+  EXPECT_EQ(simulation_->survey.metadata.name, "small-seed11-paper");
+}
+
 TEST(Simulator, DvlDriftModelIsSelectable) {
   SimulationConfig config;
   config.drift = DriftModel::kDvl;
@@ -82,6 +90,54 @@ TEST(Simulator, DvlDriftModelIsSelectable) {
   EXPECT_GT(sim.drift.max_m, 0.05);
   EXPECT_LT(sim.drift.max_m, 0.02 * sim.drift.distance_travelled_m);
   EXPECT_EQ(sim.survey.metadata.vehicle["simulation"]["drift"]["model"], "dvl");
+}
+
+TEST(SurveyPattern, OtherLineSpacingsKeepCheckLinesAcrossTheBlockAndDriveTurnsThem) {
+  for (double spacing : {20.0, 44.0}) {
+    const std::vector<LineSpec> lines = survey_pattern(Scenario::kSmall, spacing);
+    ASSERT_EQ(lines.size(), 6u);
+    EXPECT_EQ(lines[1].start.y() - lines[0].start.y(), spacing);
+    const double block_top = lines[3].start.y();
+    for (std::size_t k = 4; k < lines.size(); ++k) {
+      EXPECT_LT(std::min(lines[k].start.y(), lines[k].end.y()), 0.0) << "check line " << k;
+      EXPECT_GT(std::max(lines[k].start.y(), lines[k].end.y()), block_top) << "check line " << k;
+    }
+    MotionConfig motion;
+    motion.turn_radius_m = lawnmower_turn_radius_m(spacing);
+    const std::vector<VehicleState> states = drive(lines, motion);
+    const double step_m = motion.speed_m_s * motion.step_s;
+    double steepest_turn_deg = 0;
+    for (std::size_t i = 1; i < states.size(); ++i) {
+      EXPECT_LT(std::hypot(states[i].x - states[i - 1].x, states[i].y - states[i - 1].y), step_m + 1e-6);
+      const double turn = std::abs(std::remainder(states[i].heading_deg - states[i - 1].heading_deg, 360.0));
+      steepest_turn_deg = std::max(steepest_turn_deg, turn);
+    }
+    // No tighter than the turn radius: a step of arc turns by step / radius.
+    EXPECT_LT(steepest_turn_deg, 1.001 * step_m / motion.turn_radius_m * 180.0 / M_PI);
+    // The lawnmower ends where its last line ends: every line was flown.
+    EXPECT_NEAR(states.back().x, lines.back().end.x(), step_m);
+    EXPECT_NEAR(states.back().y, lines.back().end.y(), step_m);
+  }
+  EXPECT_EQ(lawnmower_turn_radius_m(30.0), MotionConfig{}.turn_radius_m);
+  EXPECT_EQ(lawnmower_turn_radius_m(12.0), 10.0) << "no tighter than the vehicle turns";
+}
+
+TEST(Simulator, RecordsTerrainSpacingAndCompassFault) {
+  SimulationConfig config;
+  config.seed = 4;
+  config.terrain.kind = TerrainKind::kSandWaves;
+  config.line_spacing_m = 44.0;
+  config.drift = DriftModel::kCompassStep;
+  config.sonar.beams = 16;  // the metadata is what is tested here
+  const Simulation sim = simulate(config);
+  EXPECT_EQ(sim.survey.metadata.name, "small-seed4-compass-step-sandwaves-spacing44m");
+  const nlohmann::json& simulation = sim.survey.metadata.vehicle["simulation"];
+  EXPECT_EQ(simulation["terrain"]["kind"], "sandwaves");
+  EXPECT_EQ(simulation["line_spacing_m"], 44.0);
+  EXPECT_EQ(simulation["turn_radius_m"], 22.0);
+  ASSERT_TRUE(sim.compass_step);
+  EXPECT_EQ(simulation["drift"]["compass_step"]["time"], sim.compass_step->time);
+  EXPECT_GE(std::abs(simulation["drift"]["compass_step"]["step_deg"].get<double>()), 3.0);
 }
 
 }  // namespace
