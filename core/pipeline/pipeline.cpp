@@ -10,6 +10,7 @@
 
 #include <omp.h>
 
+#include "core/pipeline/robust_backend.h"
 #include "core/sync/nav_interpolation.h"
 
 namespace bathyslam {
@@ -81,6 +82,15 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("quality.information_from_hessian", c.quality.information_from_hessian, 0, 1);
   visit("quality.hessian_full_share", c.quality.hessian_full_share, 1e-6, 1);
   visit("quality.hessian_zero_share", c.quality.hessian_zero_share, 0, 1);
+  visit("robust.dr_gate", c.robustness.dr_gate, 0, 1);
+  visit("robust.plausibility_chi2", c.robustness.consistency_config.plausibility.chi2_threshold, 0.01, 1e6);
+  visit("robust.consistency", c.robustness.consistency, 0, 1);
+  visit("robust.pair_chi2", c.robustness.consistency_config.pair_chi2_threshold, 0.01, 1e6);
+  visit("robust.safety_net", c.robustness.safety_net, 0, 1);
+  visit("robust.safety_net_p", c.robustness.check.p, 0.5, 0.999999);
+  visit("robust.max_pull_sigma", c.robustness.max_pull_sigma, 0.1, 1e6);
+  visit("robust.max_drops", c.robustness.max_drops, 0, 100000);
+  visit("graph.dcs_phi", c.graph.dcs_phi, 1e-3, 1e6);
   visit("eval.cell_m", c.consistency.cell_m, 0.05, 100);
   visit("eval.min_soundings", c.consistency.min_soundings, 1, 1000);
   visit("batch_submaps", c.batch_submaps, 0, 1000000);
@@ -127,6 +137,8 @@ Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, co
   c.feature_density = reg.feature_density;
   c.matches = reg.matches;
   c.inlier_ratio = reg.inlier_ratio;
+  c.competitor_inliers = reg.competitor_inliers;
+  c.competitor_separation_m = reg.competitor_separation_m;
   return c;
 }
 
@@ -150,7 +162,7 @@ Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, cons
 // result becomes an edge, and its quality how much the edge weighs.
 Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const TypedPair& typed,
                          const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
-                         const PipelineConfig& config) {
+                         const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const uint64_t seed = config.registration.ransac.seed ^ (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
@@ -164,12 +176,14 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
   const Eigen::Matrix3d level_from_target =
       level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
   if (c.accepted) c.information = quality_information(reg, config.quality, level_from_target);
+  if (config.robustness.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.consistency_config.plausibility);
   return c;
 }
 
 // Registers every pair in parallel from the guesses `estimate` gives; results in pair order.
 std::vector<Constraint> register_pairs(const std::vector<Eigen::Isometry3d>& estimate, const std::vector<TypedPair>& pairs,
                                        const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
+                                       const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                        const PipelineConfig& config, const std::atomic<bool>* cancel) {
   std::vector<Constraint> constraints(pairs.size());
   const int threads = config.threads > 0 ? config.threads : static_cast<int>(std::thread::hardware_concurrency());
@@ -177,19 +191,11 @@ std::vector<Constraint> register_pairs(const std::vector<Eigen::Isometry3d>& est
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (cancel != nullptr && cancel->load()) continue;
     constraints[k] = config.configuration == Configuration::kMchs
-                         ? register_mchs(estimate, pairs[k], clouds, features, config)
+                         ? register_mchs(estimate, pairs[k], clouds, features, dr, dr_poses, config)
                          : register_uniform(estimate, pairs[k], clouds, config);
   }
   check(cancel);
   return constraints;
-}
-
-std::vector<PoseGraphEdge> edges_of(const std::vector<Constraint>& constraints) {
-  std::vector<PoseGraphEdge> edges;
-  for (const Constraint& c : constraints) {
-    if (c.accepted) edges.push_back({c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor});
-  }
-  return edges;
 }
 
 // The candidates whose later submap lies in [begin, end), with footprints at `estimate`.
@@ -222,14 +228,19 @@ void register_incrementally(PipelineResult& r, const std::vector<Cloud::Ptr>& cl
   const bool incremental = config.configuration == Configuration::kMchs && config.batch_submaps > 0;
   const int batch = incremental ? config.batch_submaps : std::max(n, 1);
   std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
+  const DrNoiseModel dr(r.dr_poses, config.graph);
+  const bool consistency = config.configuration == Configuration::kMchs && config.robustness.consistency;
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
     for (int s = std::max(begin, 1); s < end; ++s) {
       estimate[s] = estimate[s - 1] * (r.dr_poses[s - 1].inverse() * r.dr_poses[s]);
     }
     const std::vector<TypedPair> pairs = candidates_ending_in(r, estimate, begin, end, config);
-    for (Constraint& c : register_pairs(estimate, pairs, clouds, features, config, cancel)) r.constraints.push_back(c);
-    if (end < n && !pairs.empty()) estimate = optimize_pose_graph(estimate, edges_of(r.constraints), config.graph).poses;
+    for (Constraint& c : register_pairs(estimate, pairs, clouds, features, dr, r.dr_poses, config, cancel)) {
+      r.constraints.push_back(c);
+    }
+    if (consistency) select_consistent_registrations(r.constraints, dr, r.dr_poses, config.robustness.consistency_config);
+    if (end < n && !pairs.empty()) estimate = solve(estimate, r.constraints, config.graph).poses;
     if (progress) progress("register", static_cast<double>(end) / n);
   }
 }
@@ -375,7 +386,11 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   }
 
   report("graph", 0);
-  r.graph = optimize_pose_graph(r.dr_poses, edges_of(r.constraints), config.graph);
+  if (config.configuration == Configuration::kMchs && config.robustness.safety_net) {
+    solve_with_safety_net(r, config);
+  } else {
+    r.graph = solve(r.dr_poses, r.constraints, config.graph);
+  }
   r.optimized_poses = r.graph.poses;
   clock.done("graph");
   check(cancel);

@@ -13,6 +13,8 @@
 #include "core/candidates/candidates.h"
 #include "core/eval/metrics.h"
 #include "core/filter/voxel_filter.h"
+#include "core/graph/graph_check.h"
+#include "core/graph/loop_consistency.h"
 #include "core/graph/pose_graph.h"
 #include "core/register/coarse_to_fine.h"
 #include "core/register/gicp.h"
@@ -46,6 +48,21 @@ struct PipelineConfig {
   KeypointConfig keypoints;
   AcceptanceConfig acceptance;
   QualityConfig quality;
+  // `mchs`'s defences against wrong edges (issue 14), each on by default; all 0 is the paper's
+  // literal method.
+  struct Robustness {
+    // Every registration against the noise dead reckoning accumulates between its submaps.
+    int dr_gate = 1;
+    // Pairwise consistency (PCM) among the registrations that carry horizontal information.
+    int consistency = 1;
+    LoopConsistencyConfig consistency_config;  // its plausibility threshold is the gate's too
+    // After the solve: lines tested against DR's noise, edges that pull beyond max_pull_sigma
+    // dropped one at a time (at most max_drops), and dead reckoning published if that fails.
+    int safety_net = 1;
+    GraphCheckConfig check;
+    double max_pull_sigma = 6.0;
+    int max_drops = 20;
+  } robustness;
   // `mchs` registers in survey order, this many submaps at a time, each batch predicted from
   // the trajectory corrected so far (pipeline.cpp, register_incrementally). 0: all at once,
   // every guess straight from dead reckoning, as `gicp` always does.
@@ -83,8 +100,25 @@ struct Constraint {
   double feature_density = 0;
   int matches = 0;
   double inlier_ratio = 0;
+  int competitor_inliers = 0;    // RANSAC's best distinct alternative
+  double competitor_separation_m = 0;
+  double dr_mahalanobis2 = -1;   // the DR gate's statistic (x, y, yaw); negative: not tested
   bool accepted = true;
   std::string reason;            // why a registration was rejected
+  // An accepted registration that the back end left out of the graph (inconsistent with the
+  // others, or dropped by the safety net), and why.
+  std::string excluded;
+  bool in_graph() const { return accepted && excluded.empty(); }
+};
+
+// What the safety net found after the solve and what it did.
+struct SafetyNet {
+  bool ran = false;
+  bool pass = true;           // the published solution passed
+  bool fell_back = false;     // it did not: dead reckoning was published instead
+  std::string verdict;        // one line for people
+  GraphCheck check;           // of the published solution (or of the last one tried)
+  std::vector<std::string> dropped;  // each edge it dropped, with the reason
 };
 
 struct StageTiming {
@@ -99,6 +133,7 @@ struct PipelineResult {
   std::vector<Eigen::Isometry3d> optimized_poses;
   std::vector<Constraint> constraints;
   GraphSolution graph;
+  SafetyNet safety_net;
   std::vector<double> dr_trajectory_errors, trajectory_errors;  // per submap with a reference
   // The same after the best rigid 2D alignment onto the reference (eval/metrics.h).
   std::vector<double> dr_aligned_trajectory_errors, aligned_trajectory_errors;

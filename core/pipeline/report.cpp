@@ -27,12 +27,13 @@ nlohmann::json constraint_stats(const PipelineResult& r) {
   auto count = [](nlohmann::json& t, const Constraint& c) {
     if (t.is_null()) t = {{"candidates", 0}, {"accepted", 0}, {"rejected", 0}, {"rejection_reasons", nlohmann::json::object()}};
     t["candidates"] = t["candidates"].get<int>() + 1;
-    if (c.accepted) {
+    if (c.in_graph()) {
       t["accepted"] = t["accepted"].get<int>() + 1;
     } else {
       t["rejected"] = t["rejected"].get<int>() + 1;
       nlohmann::json& reasons = t["rejection_reasons"];
-      reasons[kind_of(c.reason)] = reasons.value(kind_of(c.reason), 0) + 1;
+      const std::string kind = kind_of(c.accepted ? c.excluded : c.reason);
+      reasons[kind] = reasons.value(kind, 0) + 1;
     }
   };
   nlohmann::json by_path = nlohmann::json::object(), switch_decisions = nlohmann::json::object();
@@ -66,8 +67,19 @@ nlohmann::json registrations_json(const PipelineResult& r) {
                         {"feature_density", c.feature_density},
                         {"matches", c.matches},
                         {"inlier_ratio", c.inlier_ratio},
-                        {"accepted", c.accepted},
-                        {"reason", c.reason}};
+                        // In the graph: passed every registration test and kept by the back end.
+                        {"accepted", c.in_graph()},
+                        {"reason", c.accepted ? c.excluded : c.reason}};
+    nlohmann::json gates = nlohmann::json::object();
+    if (c.dr_mahalanobis2 >= 0) {
+      gates["dr_mahalanobis2"] = c.dr_mahalanobis2;
+      gates["dr_threshold"] = r.config.robustness.consistency_config.plausibility.chi2_threshold;
+    }
+    if (c.path == "feature-aided") {
+      gates["competitor_inliers"] = c.competitor_inliers;
+      gates["competitor_separation_m"] = c.competitor_separation_m;
+    }
+    j["gates"] = gates;
     auto error_json = [&](const Eigen::Isometry3d& measured) -> nlohmann::json {
       const auto e = relative_pose_error(r.submaps, c.from, c.to, measured);
       if (!e) return nullptr;
@@ -78,14 +90,15 @@ nlohmann::json registrations_json(const PipelineResult& r) {
     j["measured"] = {{"translation_m", {c.measured.translation().x(), c.measured.translation().y(), c.measured.translation().z()}},
                      {"rotation_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
     j["anchor_m"] = {c.anchor.x(), c.anchor.y(), c.anchor.z()};
-    if (c.accepted) {
+    if (c.in_graph()) {
       const Eigen::Matrix<double, 6, 1> d = c.information.diagonal();
       j["information_diagonal"] = std::vector<double>(d.data(), d.data() + 6);
+      j["information"] = std::vector<double>(c.information.data(), c.information.data() + 36);  // symmetric
     }
     if (nlohmann::json e = error_json(c.measured); !e.is_null()) {
       j["error_vs_reference"] = e;
       j["guess_error_vs_reference"] = error_json(c.guess);
-      if (c.accepted) {
+      if (c.in_graph()) {
         const auto sigmas = edge_error_sigmas(r.submaps, c.from, c.to, c.measured, c.anchor, c.information);
         j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}};
       }
@@ -93,6 +106,17 @@ nlohmann::json registrations_json(const PipelineResult& r) {
     list.push_back(std::move(j));
   }
   return list;
+}
+
+nlohmann::json safety_net_json(const SafetyNet& net) {
+  if (!net.ran) return {{"verdict", "not run"}};
+  nlohmann::json lines = nlohmann::json::array();
+  for (const LineCheck& l : net.check.lines) {
+    lines.push_back({{"line", l.run.line}, {"first_submap", l.run.first}, {"last_submap", l.run.last}, {"chi2", l.chi2},
+                     {"dof", l.dof}, {"threshold", l.threshold}, {"pass", l.pass}});
+  }
+  return {{"verdict", net.verdict}, {"pass", net.pass}, {"fell_back_to_dead_reckoning", net.fell_back},
+          {"dropped", net.dropped}, {"lines", lines}};
 }
 
 }  // namespace
@@ -104,6 +128,7 @@ nlohmann::json report_json(const PipelineResult& r) {
   nlohmann::json timings = nlohmann::json::object();
   for (const StageTiming& t : r.timings) timings[t.stage] = t.seconds;
   return {{"configuration", to_string(r.config.configuration)},
+          {"safety_net", safety_net_json(r.safety_net)},
           {"parameters", parameters(r.config)},
           {"submaps", {{"count", r.submaps.submaps.size()},
                        {"lines", r.submaps.lines.size()},
@@ -132,7 +157,7 @@ std::string report_summary(const PipelineResult& r) {
   for (const Constraint& k : r.constraints) {
     if (k.type == ConstraintType::kOdometry) continue;
     ++registrations;
-    accepted += k.accepted ? 1 : 0;
+    accepted += k.in_graph() ? 1 : 0;
   }
   char text[1024];
   std::snprintf(text, sizeof text,
@@ -143,7 +168,10 @@ std::string report_summary(const PipelineResult& r) {
                 to_string(r.config.configuration).c_str(), r.submaps.submaps.size(), r.submaps.lines.size(),
                 accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse, c.rmse, c.p95, c.p99, c.count,
                 c0.rmse);
-  return text;
+  std::string summary = text;
+  if (r.safety_net.ran) summary += "safety net         " + r.safety_net.verdict + "\n";
+  for (const std::string& d : r.safety_net.dropped) summary += "  dropped " + d + "\n";
+  return summary;
 }
 
 void write_report_plots(const PipelineResult& r, const std::filesystem::path& dir) {

@@ -92,6 +92,23 @@ TEST(AdaptiveRansac, ReportsAnAliasedSecondSolutionAndNoneWhereThereIsNone) {
   EXPECT_LT(clean.competitor_inliers, 8);
 }
 
+TEST(Acceptance, APairWithACompetingAlignmentOfHalfTheSupportIsAmbiguous) {
+  PairRegistration r;
+  r.path = RegistrationPath::kFeatureAided;
+  r.registration.quality = {true, 0.8, 5000, 0.02};
+  r.inlier_ratio = 0.6;
+  r.ransac_inliers = 40;
+  r.competitor_inliers = 10;
+  r.competitor_separation_m = 8.0;
+  const Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
+  EXPECT_EQ(rejection_reason(r, guess, {}, true), "");
+  r.competitor_inliers = 20;
+  EXPECT_EQ(rejection_reason(r, guess, {}, true).rfind("ambiguous", 0), 0u);
+  AcceptanceConfig off;
+  off.max_competitor_ratio = 0;
+  EXPECT_EQ(rejection_reason(r, guess, off, true), "") << "0 turns the test off (the paper's method)";
+}
+
 TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
   const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
   const Eigen::Isometry3d guess = pose(7.5, 2.8, 10.0) * Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0));

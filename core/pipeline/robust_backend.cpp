@@ -1,0 +1,128 @@
+#include "core/pipeline/robust_backend.h"
+
+#include "core/types/format.h"
+
+namespace bathyslam {
+namespace {
+
+PoseGraphEdge edge_of(const Constraint& c) {
+  return {c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor};
+}
+
+// Only these can bend the survey sideways or turn it; an edge without them (the direct path's
+// depth-only edges) cannot make the map horizontally wrong, whatever its error there.
+bool carries_horizontal_information(const Information6& information) {
+  return information(0, 0) > 0 || information(1, 1) > 0 || information(5, 5) > 0;
+}
+
+// How hard an edge pulls against a solution, in sigmas of its own information on x, y and yaw.
+double horizontal_pull_sigma(const PoseGraphEdge& edge, const std::vector<Eigen::Isometry3d>& poses) {
+  const Eigen::Matrix<double, 6, 1> error = edge_error(edge, poses[edge.from], poses[edge.to]);
+  const int axes[3] = {0, 1, 5};
+  double m2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) m2 += error(axes[a]) * edge.information(axes[a], axes[b]) * error(axes[b]);
+  }
+  return std::sqrt(std::max(0.0, m2));
+}
+
+constexpr const char* kInconsistent = "inconsistent with the other registrations";
+
+std::string describe(const Constraint& c) {
+  return to_string(c.type) + " " + std::to_string(c.from) + "->" + std::to_string(c.to) + " (" + c.path + ")";
+}
+
+}  // namespace
+
+void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                                 const PlausibilityConfig& config) {
+  if (!c.accepted) return;
+  const LoopCandidate measured = loop_candidate(edge_of(c), dr_poses);
+  const PlausibilityTest test = plausibility(measured.measured, dr.relative_pose(c.from, c.to),
+                                             dr.covariance(c.from, c.to) + measured.covariance, config.chi2_threshold);
+  c.dr_mahalanobis2 = test.mahalanobis2;
+  if (test.plausible) return;
+  c.accepted = false;
+  c.reason = format("implausible against dead reckoning (Mahalanobis2 %.1f > %.1f over %.0f submaps)", test.mahalanobis2,
+                    config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)));
+}
+
+void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
+                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config) {
+  std::vector<std::size_t> owner;
+  std::vector<LoopCandidate> candidates;
+  for (std::size_t k = 0; k < constraints.size(); ++k) {
+    Constraint& c = constraints[k];
+    if (c.type == ConstraintType::kOdometry) continue;
+    if (c.excluded.starts_with(kInconsistent)) c.excluded.clear();
+    if (!c.in_graph() || !carries_horizontal_information(c.information)) continue;
+    owner.push_back(k);
+    candidates.push_back(loop_candidate(edge_of(c), dr_poses));
+  }
+  const LoopSelection selection = select_consistent_loops(candidates, dr, config);
+  for (std::size_t i = 0; i < owner.size(); ++i) {
+    if (selection.verdicts[i] == LoopVerdict::kept) continue;
+    constraints[owner[i]].excluded = std::string(kInconsistent) +
+                                     (selection.verdicts[i] == LoopVerdict::implausible ? " (implausible against dead reckoning)"
+                                                                                        : " (not in the largest consistent set)");
+  }
+}
+
+GraphSolution solve(const std::vector<Eigen::Isometry3d>& dr_poses, const std::vector<Constraint>& constraints,
+                    const GraphConfig& config) {
+  std::vector<PoseGraphEdge> edges;
+  for (const Constraint& c : constraints) {
+    if (c.in_graph()) edges.push_back(edge_of(c));
+  }
+  return optimize_pose_graph(dr_poses, edges, config);
+}
+
+void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
+  SafetyNet& net = r.safety_net;
+  net = SafetyNet{};
+  net.ran = true;
+  std::vector<int> line_of_node;
+  for (const Submap& s : r.submaps.submaps) line_of_node.push_back(s.line);
+  const auto& robustness = config.robustness;
+  for (int round = 0;; ++round) {
+    std::vector<PoseGraphEdge> edges;
+    std::vector<std::size_t> owner;
+    for (std::size_t k = 0; k < r.constraints.size(); ++k) {
+      if (!r.constraints[k].in_graph()) continue;
+      edges.push_back(edge_of(r.constraints[k]));
+      owner.push_back(k);
+    }
+    r.graph = optimize_pose_graph(r.dr_poses, edges, config.graph);
+    net.check = check_graph(r.graph.poses, edges, line_of_node, robustness.check);
+    int hardest = -1;
+    double hardest_sigma = 0;
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      if (!edges[e].robust) continue;
+      const double sigma = horizontal_pull_sigma(edges[e], r.graph.poses);
+      if (sigma > hardest_sigma) hardest_sigma = sigma, hardest = static_cast<int>(e);
+    }
+    const bool pulls = hardest_sigma > robustness.max_pull_sigma;
+    if (net.check.pass && !pulls) {
+      net.verdict = net.dropped.empty()
+                        ? "pass: every line within dead reckoning's noise, no registration pulling beyond " +
+                              format("%.0f sigma", robustness.max_pull_sigma)
+                        : format("pass after dropping %.0f registrations", static_cast<double>(net.dropped.size()));
+      return;
+    }
+    if (hardest < 0 || round >= robustness.max_drops) {
+      net.pass = false;
+      net.fell_back = true;
+      net.verdict = format("FAILED after dropping %.0f registrations (%s): published dead reckoning instead",
+                           static_cast<double>(net.dropped.size()),
+                           net.check.pass ? "registrations still pulling against the solution" : "lines bent beyond their noise");
+      r.graph.poses = r.dr_poses;
+      return;
+    }
+    Constraint& worst = r.constraints[owner[hardest]];
+    worst.excluded = format("safety net: pulled %.1f sigma against the solution", hardest_sigma) +
+                     (net.check.pass ? "" : ", lines bent beyond their noise");
+    net.dropped.push_back(describe(worst) + ": " + worst.excluded);
+  }
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,34 @@
+#pragma once
+// The back end's defences against wrong edges (issue 14): which registrations the graph may
+// believe, and the safety net that checks the solution against dead reckoning's noise before
+// it is published.
+#include <vector>
+
+#include "core/graph/dr_noise.h"
+#include "core/pipeline/pipeline.h"
+
+namespace bathyslam {
+
+// The DR gate: could dead reckoning have drifted to this registration's answer? Sets the
+// constraint's statistic, and refuses it when not.
+void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                                 const PlausibilityConfig& config);
+
+// Pairwise consistency (PCM) over the accepted registrations that carry horizontal information
+// (the ones that can bend the survey); the rest of the accepted set is left out of the graph
+// with the reason. Recomputed from scratch on each call: a later batch may confirm a
+// registration an earlier one could not.
+void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
+                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config);
+
+// The graph of the constraints in it, solved from dead reckoning.
+GraphSolution solve(const std::vector<Eigen::Isometry3d>& dr_poses, const std::vector<Constraint>& constraints,
+                    const GraphConfig& config);
+
+// Solves, then tests the solution (graph_check.h): while a line's odometry residuals fail the
+// chi-square test or a registration pulls beyond `max_pull_sigma`, the hardest-pulling
+// registration is dropped (named in the report) and the graph solved again; when that does not
+// end in a passing solution, dead reckoning is published and the report says so.
+void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config);
+
+}  // namespace bathyslam

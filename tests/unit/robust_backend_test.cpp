@@ -1,0 +1,152 @@
+// The pipeline's defences against wrong edges, on constraints built by hand: the DR gate, the
+// consistency selection, and the safety net that checks a solution before it is published.
+#include "core/pipeline/robust_backend.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace bathyslam {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Eigen::Isometry3d pose(double x, double y, double yaw) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.translation() = Eigen::Vector3d(x, y, -10.0);
+  p.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return p;
+}
+
+// Two lines of `n` submaps, 20 m apart along the line, 30 m between the lines (east, then back
+// west), with dead reckoning that drifts in yaw; odometry constraints carry Table 1's DR noise.
+struct Survey2Lines {
+  std::vector<Eigen::Isometry3d> truth;
+  PipelineResult result;
+};
+
+Survey2Lines two_lines(int n, uint64_t seed) {
+  Survey2Lines s;
+  for (int i = 0; i < n; ++i) s.truth.push_back(pose(20.0 * i, 0, 0));
+  for (int i = n - 1; i >= 0; --i) s.truth.push_back(pose(20.0 * i, 30.0, M_PI));
+  PipelineResult& r = s.result;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> yaw_noise(0.0, 0.006);
+  r.dr_poses = {s.truth[0]};
+  for (std::size_t i = 1; i < s.truth.size(); ++i) {
+    r.dr_poses.push_back(r.dr_poses.back() * (s.truth[i - 1].inverse() * s.truth[i]) * pose(0, 0, yaw_noise(rng)) *
+                         Eigen::Translation3d(0, 0, 10.0));
+  }
+  for (std::size_t i = 0; i < s.truth.size(); ++i) {
+    Submap m;
+    m.index = static_cast<int>(i);
+    m.line = static_cast<int>(i) < n ? 0 : 1;
+    r.submaps.submaps.push_back(m);
+  }
+  const Information6 dr_information = information_from_sigmas(r.config.graph.dr_sigma_translation_m, r.config.graph.dr_sigma_rotation_rad);
+  for (const PoseGraphEdge& e : odometry_edges(r.dr_poses, dr_information)) {
+    Constraint c;
+    c.from = e.from;
+    c.to = e.to;
+    c.measured = e.measured;
+    c.information = e.information;
+    r.constraints.push_back(c);
+  }
+  return s;
+}
+
+// A registration between two submaps: the truth moved by `error` (x, y, yaw), with the
+// information of a good feature-aided registration.
+Constraint registration(const Survey2Lines& s, int from, int to, double ex = 0, double ey = 0, double eyaw = 0) {
+  Constraint c;
+  c.type = ConstraintType::kLoop;
+  c.from = from;
+  c.to = to;
+  c.path = "feature-aided";
+  c.measured = pose(ex, ey, eyaw) * Eigen::Translation3d(0, 0, 10.0) * (s.truth[from].inverse() * s.truth[to]);
+  c.information = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
+  return c;
+}
+
+double max_error(const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Isometry3d>& truth) {
+  double e = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) e = std::max(e, (poses[i].translation() - truth[i].translation()).norm());
+  return e;
+}
+
+TEST(DrGate, RefusesARegistrationTurnedFarBeyondWhatDeadReckoningCanDriftAndKeepsTheTruth) {
+  const Survey2Lines s = two_lines(20, 1);
+  const DrNoiseModel dr(s.result.dr_poses, GraphConfig{});
+  Constraint good = registration(s, 5, 34), turned = registration(s, 5, 34, 3.0, -2.0, 120 * kDeg);
+  gate_against_dead_reckoning(good, dr, s.result.dr_poses, PlausibilityConfig{});
+  gate_against_dead_reckoning(turned, dr, s.result.dr_poses, PlausibilityConfig{});
+  EXPECT_TRUE(good.accepted) << good.reason;
+  EXPECT_LT(good.dr_mahalanobis2, 16.27);
+  EXPECT_FALSE(turned.accepted);
+  EXPECT_GT(turned.dr_mahalanobis2, 100.0);
+  EXPECT_NE(turned.reason.find("implausible against dead reckoning"), std::string::npos) << turned.reason;
+}
+
+TEST(ConsistencySelection, LeavesOutTheRegistrationsThatDisagreeAndNeverTouchesDepthOnlyEdges) {
+  Survey2Lines s = two_lines(20, 2);
+  std::vector<Constraint>& constraints = s.result.constraints;
+  for (int i = 2; i < 18; i += 3) constraints.push_back(registration(s, i, 39 - i));      // agree
+  constraints.push_back(registration(s, 4, 34, 12.0, 5.0, 10 * kDeg));                     // wrong
+  constraints.push_back(registration(s, 9, 31, -15.0, 0.0, -8 * kDeg));                    // wrong
+  Constraint depth_only = registration(s, 10, 29, 25.0, 25.0, 0.0);  // far off, but only depth
+  for (int k : {0, 1, 5}) depth_only.information(k, k) = 0;
+  depth_only.path = "direct";
+  constraints.push_back(depth_only);
+
+  const DrNoiseModel dr(s.result.dr_poses, GraphConfig{});
+  select_consistent_registrations(constraints, dr, s.result.dr_poses, LoopConsistencyConfig{});
+  const std::size_t n = constraints.size();
+  for (std::size_t k = n - 9; k < n - 3; ++k) EXPECT_TRUE(constraints[k].in_graph()) << k << ": " << constraints[k].excluded;
+  EXPECT_FALSE(constraints[n - 3].in_graph());
+  EXPECT_FALSE(constraints[n - 2].in_graph());
+  EXPECT_NE(constraints[n - 2].excluded.find("inconsistent"), std::string::npos);
+  EXPECT_TRUE(constraints[n - 1].in_graph()) << "an edge without horizontal information cannot bend the survey";
+}
+
+// A wrong edge with the information of a good one, forced past the front end's tests: the
+// safety net finds it pulling against the solution, drops it, and the published trajectory is
+// the one the good edges give.
+TEST(SafetyNet, DropsAConfidentlyWrongEdgeAndPublishesWhatTheGoodEdgesGive) {
+  Survey2Lines s = two_lines(20, 3);
+  for (int i = 1; i < 19; i += 2) s.result.constraints.push_back(registration(s, i, 39 - i));
+  PipelineResult good = s.result;
+  solve_with_safety_net(good, good.config);
+  ASSERT_TRUE(good.safety_net.pass) << good.safety_net.verdict;
+  EXPECT_TRUE(good.safety_net.dropped.empty());
+
+  s.result.constraints.push_back(registration(s, 6, 30, 20.0, -10.0, 90 * kDeg));
+  PipelineResult unchecked = s.result;
+  unchecked.graph = solve(unchecked.dr_poses, unchecked.constraints, unchecked.config.graph);
+  PipelineResult checked = s.result;
+  solve_with_safety_net(checked, checked.config);
+
+  EXPECT_TRUE(checked.safety_net.pass) << checked.safety_net.verdict;
+  ASSERT_EQ(checked.safety_net.dropped.size(), 1u);
+  EXPECT_NE(checked.safety_net.dropped[0].find("6->30"), std::string::npos) << checked.safety_net.dropped[0];
+  EXPECT_FALSE(checked.constraints.back().in_graph());
+  EXPECT_NEAR(max_error(checked.graph.poses, s.truth), max_error(good.graph.poses, s.truth), 1e-6);
+  EXPECT_GT(max_error(unchecked.graph.poses, s.truth), max_error(good.graph.poses, s.truth) + 1.0)
+      << "the test needs a wrong edge that does harm";
+}
+
+// Edges that all agree on a wrong answer bend both lines; when dropping up to `max_drops` of
+// them does not give a solution within DR's noise, dead reckoning is published.
+TEST(SafetyNet, FallsBackToDeadReckoningWhenNoSolutionPasses) {
+  Survey2Lines s = two_lines(20, 4);
+  for (int i = 1; i < 19; ++i) s.result.constraints.push_back(registration(s, i, 39 - i, 0.0, 0.0, 25 * kDeg));
+  s.result.config.robustness.max_drops = 3;
+  solve_with_safety_net(s.result, s.result.config);
+  EXPECT_FALSE(s.result.safety_net.pass);
+  EXPECT_TRUE(s.result.safety_net.fell_back);
+  EXPECT_EQ(s.result.safety_net.dropped.size(), 3u);
+  EXPECT_NE(s.result.safety_net.verdict.find("published dead reckoning"), std::string::npos);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(s.result.graph.poses[i].isApprox(s.result.dr_poses[i]));
+}
+
+}  // namespace
+}  // namespace bathyslam
