@@ -44,6 +44,14 @@ std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d&
                     static_cast<double>(r.competitor_inliers), static_cast<double>(r.ransac_inliers));
     }
   }
+  if (config.min_distinctness > 0 && r.path == RegistrationPath::kFeatureAided) {
+    const Uniqueness& u = r.uniqueness;
+    if (!u.probed) return "ambiguous (too little terrain overlap to probe its uniqueness)";
+    if (u.distinctness() < config.min_distinctness) {
+      return format("ambiguous (the terrain also fits %.1f m away: distinctness %.2f < %.2f)", u.alternative_offset_m.norm(),
+                    u.distinctness(), config.min_distinctness);
+    }
+  }
   const double moved = (r.registration.source_to_target.translation() - guess.translation()).norm();
   if (moved > config.max_translation_m) return format("translation from dead reckoning %.1f m > %.1f m", moved, config.max_translation_m);
   return {};
@@ -82,6 +90,9 @@ Information6 quality_information(const PairRegistration& r, const QualityConfig&
   Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
   if (r.path == RegistrationPath::kDirect) {
     for (int k : {0, 1, 5}) information(k, k) *= config.direct_horizontal_share;
+    if (config.direct_depth_from_relief && r.uniqueness.probed && r.uniqueness.local_cost_m2 > 0) {
+      information(2, 2) = std::min(information(2, 2), 1.0 / r.uniqueness.local_cost_m2);
+    }
   }
   return information;
 }

@@ -19,6 +19,10 @@ struct AcceptanceConfig {  // Table 1 (b)
   // least this share of the winner's RANSAC inliers has no unique solution (a periodic seabed,
   // parallel ridges) and is refused. 0 turns the test off.
   double max_competitor_ratio = 0.5;
+  // Uniqueness (feature-aided path, register/uniqueness.h): refused when another horizontal
+  // offset of the terrain fits this close to as well as the answer does (0: as well; 1: as
+  // badly as a typical misalignment). 0 turns the test off.
+  double min_distinctness = 0.3;
 };
 
 // Empty when accepted; otherwise the first failed test in words. A loop closure spans the
@@ -37,6 +41,11 @@ struct QualityConfig {
   // guess's error (metres to tens of metres) with a good residual. They constrain depth,
   // roll and pitch; the horizontal comes from dead reckoning and feature-aided edges.
   double direct_horizontal_share = 0.0;
+  // Nor does the direct path know where along the bottom its depth was measured: on sloping,
+  // rippled or rough ground a depth taken a few metres off is a different depth. Its depth
+  // information is capped at what the relief around the answer allows (the uniqueness probe's
+  // local cost, as a variance); on a flat bottom that is no cap at all. 0 turns the cap off.
+  int direct_depth_from_relief = 1;
   // 1: the information's shape comes from what the registration observed, the GICP cost's
   // Hessian (observed_information), instead of the diagonal above; direct_horizontal_share
   // then no longer applies, the Hessian telling flat overlaps from textured ones itself. Needs

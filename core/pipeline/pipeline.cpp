@@ -70,6 +70,12 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
   visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
   visit("accept.max_translation_m", c.acceptance.max_translation_m, 0, 100000);
+  visit("accept.min_distinctness", c.acceptance.min_distinctness, 0, 1);
+  visit("uniqueness.search_radius_m", c.registration.uniqueness.search_radius_m, 1, 1000);
+  visit("uniqueness.step_m", c.registration.uniqueness.step_m, 0.1, 100);
+  visit("uniqueness.local_radius_m", c.registration.uniqueness.local_radius_m, 0, 1000);
+  visit("quality.direct_depth_from_relief", c.quality.direct_depth_from_relief, 0, 1);
+  visit("uniqueness.exclusion_m", c.registration.uniqueness.exclusion_m, 0, 1000);
   visit("accept.max_competitor_ratio", c.acceptance.max_competitor_ratio, 0, 1);
   visit("ransac.competitor_separation_m", c.registration.ransac.competitor_separation_m, 0.01, 1000);
   visit("quality.sigma_x_m", c.quality.best_sigma_translation_m.x(), 1e-4, 1e3);
@@ -139,6 +145,7 @@ Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, co
   c.inlier_ratio = reg.inlier_ratio;
   c.competitor_inliers = reg.competitor_inliers;
   c.competitor_separation_m = reg.competitor_separation_m;
+  c.uniqueness = reg.uniqueness;
   return c;
 }
 

@@ -102,6 +102,7 @@ struct Constraint {
   double inlier_ratio = 0;
   int competitor_inliers = 0;    // RANSAC's best distinct alternative
   double competitor_separation_m = 0;
+  Uniqueness uniqueness;         // feature-aided path: the terrain probed around the answer
   double dr_mahalanobis2 = -1;   // the DR gate's statistic (x, y, yaw); negative: not tested
   bool accepted = true;
   std::string reason;            // why a registration was rejected

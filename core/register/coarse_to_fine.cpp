@@ -6,7 +6,7 @@ namespace bathyslam {
 
 SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints) {
   const TerrainGrid terrain = grid_terrain(submap.points, grid);
-  return {detect_keypoints(terrain, keypoints), terrain.valid_cells()};
+  return {detect_keypoints(terrain, keypoints), terrain.valid_cells(), terrain};
 }
 
 double feature_density(const SubmapFeatures& a, const SubmapFeatures& b) {
@@ -44,6 +44,7 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
     r.path = RegistrationPath::kDirect;
     r.why = std::move(why);
     r.feature_density = density;
+    r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
     return r;
   };
   if (density < config.switching.min_feature_density) {
@@ -82,6 +83,7 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
   r.ransac_inliers = static_cast<int>(coarse.inliers.size());
   r.competitor_inliers = coarse.competitor_inliers;
   r.competitor_separation_m = coarse.competitor_separation_m;
+  r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
   r.inlier_ratio = coarse.inlier_ratio;
   return r;
 }

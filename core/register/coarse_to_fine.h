@@ -9,6 +9,7 @@
 #include "core/matching/adaptive_ransac.h"
 #include "core/matching/feature_matching.h"
 #include "core/register/gicp.h"
+#include "core/register/uniqueness.h"
 #include "core/register/registration_information.h"
 #include "core/submaps/submap.h"
 
@@ -17,6 +18,7 @@ namespace bathyslam {
 struct SubmapFeatures {
   std::vector<Keypoint> keypoints;
   int valid_cells = 0;
+  TerrainGrid grid;  // kept for the uniqueness probe
 };
 
 SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints);
@@ -37,6 +39,7 @@ struct CoarseToFineConfig {
   RansacConfig ransac;
   GicpConfig gicp;
   double crop_margin_m = 1.0;
+  UniquenessConfig uniqueness;  // probed on the feature-aided path's answer
   // The feature-aided path starts GICP within centimetres to a metre of the answer on textured
   // ground, where registering about the centroids with a refining pass at this gate reaches
   // a few centimetres and a tenth of a degree instead of Table 1's ~0.2 m and ~0.8 deg
@@ -63,6 +66,7 @@ struct PairRegistration {
   Eigen::Isometry3d coarse = Eigen::Isometry3d::Identity();  // where GICP started
   Registration registration;
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // centroid of the source overlap, source frame
+  Uniqueness uniqueness;  // feature-aided path: whether another offset fits nearly as well
   // Of the GICP cost at the result, about `anchor`, in the target frame; empty (no
   // correspondences) unless asked for or without a registration.
   GicpHessian hessian;

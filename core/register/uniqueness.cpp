@@ -1,0 +1,122 @@
+#include "core/register/uniqueness.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace bathyslam {
+namespace {
+
+// Target elevation (up) at a target-frame position, bilinear over valid cells; NaN off the grid
+// or next to a hole.
+float elevation_at(const TerrainGrid& grid, double x, double y) {
+  const double u = (x - grid.origin.x()) / grid.cell_m, v = (y - grid.origin.y()) / grid.cell_m;
+  const int c = static_cast<int>(std::floor(u)), r = static_cast<int>(std::floor(v));
+  if (c < 0 || r < 0 || c + 1 >= grid.cols() || r + 1 >= grid.rows()) return std::numeric_limits<float>::quiet_NaN();
+  const uint8_t* valid0 = grid.valid.ptr<uint8_t>(r);
+  const uint8_t* valid1 = grid.valid.ptr<uint8_t>(r + 1);
+  if (!valid0[c] || !valid0[c + 1] || !valid1[c] || !valid1[c + 1]) return std::numeric_limits<float>::quiet_NaN();
+  const float* row0 = grid.elevation.ptr<float>(r);
+  const float* row1 = grid.elevation.ptr<float>(r + 1);
+  const float fu = static_cast<float>(u - c), fv = static_cast<float>(v - r);
+  return (1 - fv) * ((1 - fu) * row0[c] + fu * row0[c + 1]) + fv * ((1 - fu) * row1[c] + fu * row1[c + 1]);
+}
+
+struct Cost {
+  double mean_square = std::numeric_limits<double>::infinity();
+  int cells = 0;
+};
+
+// Mean squared difference between the moved source cells and the target at `offset`, their
+// mean difference removed (a depth bias is not a misalignment).
+Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& moved, const Eigen::Vector2d& offset) {
+  double sum = 0, sum_sq = 0;
+  int n = 0;
+  for (const Eigen::Vector3d& p : moved) {
+    const float up = elevation_at(target, p.x() + offset.x(), p.y() + offset.y());
+    if (std::isnan(up)) continue;
+    const double d = -p.z() - up;
+    sum += d;
+    sum_sq += d * d;
+    ++n;
+  }
+  Cost c;
+  c.cells = n;
+  if (n > 0) c.mean_square = std::max(0.0, sum_sq / n - (sum / n) * (sum / n));
+  return c;
+}
+
+}  // namespace
+
+double Uniqueness::distinctness() const {
+  const double spread = typical_cost_m2 - cost_at_answer_m2;
+  if (!probed || spread <= 0) return 0.0;
+  return (alternative_cost_m2 - cost_at_answer_m2) / spread;
+}
+
+Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source, const Eigen::Isometry3d& source_to_target,
+                            const UniquenessConfig& config) {
+  Uniqueness u;
+  std::vector<Eigen::Vector3d> moved;
+  for (int r = 0; r < source.rows(); ++r) {
+    for (int c = 0; c < source.cols(); ++c) {
+      if (!source.valid.at<uint8_t>(r, c)) continue;
+      const Eigen::Vector2d xy = source.position(c, r);
+      moved.push_back(source_to_target * Eigen::Vector3d(xy.x(), xy.y(), -source.elevation.at<float>(r, c)));
+    }
+  }
+  const Cost at_answer = cost_at(target, moved, Eigen::Vector2d::Zero());
+  if (at_answer.cells < 50) return u;
+  // Only the cells that overlap at the answer take part, so every offset compares the same ground.
+  std::vector<Eigen::Vector3d> overlap;
+  for (const Eigen::Vector3d& p : moved) {
+    if (!std::isnan(elevation_at(target, p.x(), p.y()))) overlap.push_back(p);
+  }
+
+  const int reach = static_cast<int>(std::floor(config.search_radius_m / config.step_m));
+  const int side = 2 * reach + 1;
+  std::vector<double> cost(static_cast<std::size_t>(side) * side, std::numeric_limits<double>::infinity());
+  std::vector<double> compared, local;
+  const int min_cells = static_cast<int>(config.min_overlap_share * at_answer.cells);
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const Eigen::Vector2d offset(i * config.step_m, j * config.step_m);
+      if (offset.norm() > config.search_radius_m) continue;
+      const Cost c = cost_at(target, overlap, offset);
+      if (c.cells < min_cells) continue;
+      cost[static_cast<std::size_t>(j + reach) * side + (i + reach)] = c.mean_square;
+      compared.push_back(c.mean_square);
+      if (offset.norm() <= config.local_radius_m) local.push_back(c.mean_square);
+    }
+  }
+  if (compared.size() < 9) return u;
+  u.probed = true;
+  u.cost_at_answer_m2 = at_answer.mean_square;
+  std::nth_element(compared.begin(), compared.begin() + compared.size() / 2, compared.end());
+  u.typical_cost_m2 = compared[compared.size() / 2];
+  if (!local.empty()) {
+    std::nth_element(local.begin(), local.begin() + local.size() / 2, local.end());
+    u.local_cost_m2 = local[local.size() / 2];
+  }
+
+  u.alternative_cost_m2 = u.typical_cost_m2;
+  auto at = [&](int i, int j) { return cost[static_cast<std::size_t>(j + reach) * side + (i + reach)]; };
+  for (int j = -reach + 1; j < reach; ++j) {
+    for (int i = -reach + 1; i < reach; ++i) {
+      const double here = at(i, j);
+      if (!std::isfinite(here) || std::hypot(i, j) * config.step_m < config.exclusion_m) continue;
+      bool minimum = true;
+      for (int dj = -1; dj <= 1 && minimum; ++dj) {
+        for (int di = -1; di <= 1 && minimum; ++di) minimum = (di == 0 && dj == 0) || here <= at(i + di, j + dj);
+      }
+      if (minimum && here < u.alternative_cost_m2) {
+        u.alternative_cost_m2 = here;
+        u.alternative_offset_m = Eigen::Vector2d(i * config.step_m, j * config.step_m);
+      }
+    }
+  }
+  return u;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,46 @@
+#pragma once
+// register (uniqueness): is a registration's answer the only good alignment of the pair? On a
+// periodic seabed (sand waves, megaripples, parallel ridges) the terrain matches itself one
+// wavelength along, and feature matching can lock onto any of those aliases with every match
+// agreeing: RANSAC sees no competitor and GICP refines the alias to a good residual. The probe
+// slides the source's terrain over the target's around the answer and asks whether another
+// horizontal offset fits nearly as well.
+#include <Eigen/Geometry>
+
+#include "core/features/terrain_grid.h"
+
+namespace bathyslam {
+
+struct UniquenessConfig {
+  // Offsets probed, horizontally in the target frame: as far as a wrong alias could sit from the
+  // answer and still reach the overlap (the matching gate is 30 m).
+  double search_radius_m = 24.0;
+  double step_m = 1.0;  // half the shortest wavelength that makes features at 0.5 m cells
+  // Minima nearer the answer than this belong to its own basin.
+  double exclusion_m = 3.0;
+  // An offset must keep this share of the cells the answer overlaps, or it compares too little.
+  double min_overlap_share = 0.5;
+  // How far from the answer the truth may lie when nothing pins the answer horizontally (the
+  // direct path keeps its guess's horizontal error: p50 2-6 m on `lake`): the relief within this
+  // radius is how wrong a depth measured at the wrong place can be.
+  double local_radius_m = 5.0;
+};
+
+struct Uniqueness {
+  bool probed = false;  // false: too little overlap to compare
+  double cost_at_answer_m2 = 0;  // mean squared elevation difference, mean removed
+  double typical_cost_m2 = 0;    // median over all offsets probed: what a misalignment costs
+  double local_cost_m2 = 0;      // median over the offsets within local_radius_m
+  double alternative_cost_m2 = 0;  // the lowest local minimum outside the exclusion radius
+  Eigen::Vector2d alternative_offset_m = Eigen::Vector2d::Zero();
+  // (alternative − answer) / (typical − answer): 0 when another offset fits as well as the
+  // answer, about 1 when every other offset fits as badly as a typical misalignment.
+  double distinctness() const;
+};
+
+// `source_to_target` maps the source submap frame into the target's (z down); the grids are the
+// submaps' own (features/terrain_grid.h).
+Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source, const Eigen::Isometry3d& source_to_target,
+                            const UniquenessConfig& config = {});
+
+}  // namespace bathyslam

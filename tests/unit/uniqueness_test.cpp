@@ -1,0 +1,76 @@
+// The uniqueness probe: a periodic seabed fits itself one wavelength along, mounds do not.
+#include "core/register/uniqueness.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "tests/unit/synthetic_terrain.h"
+
+namespace bathyslam {
+namespace {
+
+Eigen::Isometry3d pose(double x, double y, double yaw_deg) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.translation() = Eigen::Vector3d(x, y, 0);
+  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return p;
+}
+
+// Soundings every 0.25 m over a 40 x 40 m square of `elevation` (up, world frame), in the
+// submap frame at `frame` (z down), with 2 cm noise.
+template <typename Elevation>
+TerrainGrid grid_of(const Elevation& elevation, const Eigen::Isometry3d& frame, double x0, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3f> points;
+  for (double x = x0; x <= x0 + 40; x += 0.25) {
+    for (double y = 0; y <= 40; y += 0.25) {
+      const Eigen::Vector3d world(x, y, -(elevation(Eigen::Vector2d(x, y)) + noise(rng)));
+      points.push_back((frame.inverse() * world).cast<float>());
+    }
+  }
+  return grid_terrain(points);
+}
+
+// Two submaps that overlap by 30 m in x, the second turned and shifted; probed at the truth.
+template <typename Elevation>
+Uniqueness probe_at_truth(const Elevation& elevation) {
+  const Eigen::Isometry3d target_frame = pose(0, 0, 0), source_frame = pose(10, 2, 7);
+  const TerrainGrid target = grid_of(elevation, target_frame, 0, 1), source = grid_of(elevation, source_frame, 10, 2);
+  return probe_uniqueness(target, source, target_frame.inverse() * source_frame);
+}
+
+TEST(Uniqueness, SandWavesFitOneWavelengthAlongAcrossTheirCrests) {
+  const double wavelength = 9.0;
+  const Eigen::Vector2d across = Eigen::Vector2d(std::cos(0.5), std::sin(0.5));
+  const Eigen::Vector2d along(-across.y(), across.x());
+  // Crests that rise and fall along their length, as real ones do: only a shift across them by
+  // whole wavelengths fits again.
+  auto sand_waves = [&](const Eigen::Vector2d& p) {
+    const double height = 0.5 + 0.3 * std::sin(2 * M_PI * along.dot(p) / 23.0);
+    return -10.0 + height * std::sin(2 * M_PI * across.dot(p) / wavelength);
+  };
+  const Uniqueness u = probe_at_truth(sand_waves);
+  ASSERT_TRUE(u.probed);
+  EXPECT_LT(u.distinctness(), 0.1);
+  EXPECT_NEAR(u.alternative_offset_m.norm(), wavelength, 1.0);
+  EXPECT_GT(std::abs(u.alternative_offset_m.normalized().dot(across)), 0.9) << "the alias lies across the crests";
+}
+
+TEST(Uniqueness, MoundsFitOnlyWhereTheyAre) {
+  const SyntheticTerrain mounds = SyntheticTerrain::with_mounds(5);
+  const Uniqueness u = probe_at_truth([&](const Eigen::Vector2d& p) { return mounds.elevation(p); });
+  ASSERT_TRUE(u.probed);
+  EXPECT_LT(u.cost_at_answer_m2, 0.01);
+  EXPECT_GT(u.distinctness(), 0.5);
+}
+
+TEST(Uniqueness, AFlatBottomHasNoUniqueAnswer) {
+  const Uniqueness u = probe_at_truth([](const Eigen::Vector2d&) { return -10.0; });
+  ASSERT_TRUE(u.probed);
+  EXPECT_LT(u.distinctness(), 0.3);
+}
+
+}  // namespace
+}  // namespace bathyslam
