@@ -146,6 +146,14 @@ void run_report(const JobOptions& o) {
     print_stats("trajectory", report.trajectory(), report.trajectory_dr());
     print_constraints("constraint", report.constraints_by_type());
     if (report.constraints_by_path_size() > 0) print_constraints("path", report.constraints_by_path());
+    // Whether to trust the map: the safety net's verdict and what it dropped.
+    const nlohmann::json net = nlohmann::json::parse(report.report_json()).value("safety_net", nlohmann::json::object());
+    if (net.contains("verdict")) {
+      std::printf("\nsafety net: %s\n", net["verdict"].get<std::string>().c_str());
+      for (const nlohmann::json& dropped : net.value("dropped", nlohmann::json::array())) {
+        std::printf("  dropped %s\n", dropped.get<std::string>().c_str());
+      }
+    }
   }
   if (!o.out.empty())
     std::fprintf(stderr, "saved report.json and %d plots in %s\n", report.plots_size(), o.out.c_str());

@@ -48,7 +48,7 @@ std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d&
     const Uniqueness& u = r.uniqueness;
     if (!u.probed) return "ambiguous (too little terrain overlap to probe its uniqueness)";
     if (u.distinctness() < config.min_distinctness) {
-      return format("ambiguous (the terrain also fits %.1f m away: distinctness %.2f < %.2f)", u.alternative_offset_m.norm(),
+      return format("ambiguous (the terrain also fits %.1f m away: distinctness %.1f < %.1f)", u.alternative_offset_m.norm(),
                     u.distinctness(), config.min_distinctness);
     }
   }

@@ -70,7 +70,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
   visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
   visit("accept.max_translation_m", c.acceptance.max_translation_m, 0, 100000);
-  visit("accept.min_distinctness", c.acceptance.min_distinctness, 0, 1);
+  visit("accept.min_distinctness", c.acceptance.min_distinctness, 0, 1e6);
   visit("uniqueness.search_radius_m", c.registration.uniqueness.search_radius_m, 1, 1000);
   visit("uniqueness.step_m", c.registration.uniqueness.step_m, 0.1, 100);
   visit("uniqueness.local_radius_m", c.registration.uniqueness.local_radius_m, 0, 1000);
@@ -403,12 +403,13 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   check(cancel);
 
   report("eval", 0);
+  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, config.consistency);
+  r.consistency = consistency_error(r.submaps, r.optimized_poses, config.consistency);
+  if (r.safety_net.ran && !r.safety_net.fell_back) fall_back_unless_more_consistent(r);
   r.dr_trajectory_errors = trajectory_errors(r.submaps, r.dr_poses);
   r.trajectory_errors = trajectory_errors(r.submaps, r.optimized_poses);
   r.dr_aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.dr_poses);
   r.aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.optimized_poses);
-  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, config.consistency);
-  r.consistency = consistency_error(r.submaps, r.optimized_poses, config.consistency);
   clock.done("eval");
   report("done", 1);
   return r;

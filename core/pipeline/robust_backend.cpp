@@ -125,4 +125,17 @@ void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
   }
 }
 
+void fall_back_unless_more_consistent(PipelineResult& r) {
+  const ErrorStats &solved = r.consistency.stats, &dr = r.dr_consistency.stats;
+  if (solved.rmse <= dr.rmse && solved.p99 <= dr.p99) return;
+  r.safety_net.pass = false;
+  r.safety_net.fell_back = true;
+  r.safety_net.verdict = format("FAILED: the solved map agrees with itself less than dead reckoning's (consistency RMSE %.3f m "
+                                "against %.3f m, p99 %.3f m against %.3f m): published dead reckoning instead",
+                                solved.rmse, dr.rmse, solved.p99, dr.p99);
+  r.optimized_poses = r.dr_poses;
+  r.graph.poses = r.dr_poses;
+  r.consistency = r.dr_consistency;
+}
+
 }  // namespace bathyslam

@@ -31,4 +31,10 @@ GraphSolution solve(const std::vector<Eigen::Isometry3d>& dr_poses, const std::v
 // end in a passing solution, dead reckoning is published and the report says so.
 void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config);
 
+// The last test needs no reference: a map is published only when it agrees with itself better
+// than dead reckoning's does (consistency RMSE and p99 over the cells two lines share). Otherwise
+// the data do not support the solution, and dead reckoning is published, the report saying why.
+// `r.consistency` and `r.dr_consistency` must be filled; the first is replaced on a fall-back.
+void fall_back_unless_more_consistent(PipelineResult& r);
+
 }  // namespace bathyslam

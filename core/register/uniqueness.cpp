@@ -49,10 +49,9 @@ Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& move
 
 }  // namespace
 
-double Uniqueness::distinctness() const {
-  const double spread = typical_cost_m2 - cost_at_answer_m2;
-  if (!probed || spread <= 0) return 0.0;
-  return (alternative_cost_m2 - cost_at_answer_m2) / spread;
+double Uniqueness::distinctness(double noise_floor_m2) const {
+  if (!probed) return 0.0;
+  return alternative_cost_m2 / std::max(cost_at_answer_m2, noise_floor_m2);
 }
 
 Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source, const Eigen::Isometry3d& source_to_target,

@@ -29,13 +29,15 @@ struct UniquenessConfig {
 struct Uniqueness {
   bool probed = false;  // false: too little overlap to compare
   double cost_at_answer_m2 = 0;  // mean squared elevation difference, mean removed
-  double typical_cost_m2 = 0;    // median over all offsets probed: what a misalignment costs
+  double typical_cost_m2 = 0;    // median over all offsets probed: what a misalignment costs (reported)
   double local_cost_m2 = 0;      // median over the offsets within local_radius_m
   double alternative_cost_m2 = 0;  // the lowest local minimum outside the exclusion radius
   Eigen::Vector2d alternative_offset_m = Eigen::Vector2d::Zero();
-  // (alternative − answer) / (typical − answer): 0 when another offset fits as well as the
-  // answer, about 1 when every other offset fits as badly as a typical misalignment.
-  double distinctness() const;
+  // How much worse the best alternative fits than the answer: the ratio of their mean squared
+  // misfits, the answer's floored at `noise_floor_m2`. About 1 when another offset fits as well
+  // (a periodic or flat seabed); in the hundreds on textured ground, where only the answer
+  // leaves nothing but sounding noise.
+  double distinctness(double noise_floor_m2 = 4e-4) const;
 };
 
 // `source_to_target` maps the source submap frame into the target's (z down); the grids are the

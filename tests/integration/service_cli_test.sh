@@ -48,6 +48,7 @@ for stage in load submaps register graph eval map store; do
 done
 
 "$BATHYSLAM" report "$job" --out "$work/report" > "$work/table" || fail "report"
+grep -q "^safety net: " "$work/table" || fail "the report table has no safety-net verdict"
 grep -q "^consistency " "$work/table" && grep -q "^adjacent " "$work/table" || fail "$(cat "$work/table")"
 for png in consistency_histogram trajectory_error trajectory; do
   [ "$(head -c 4 "$work/report/$png.png" | tail -c 3)" = "PNG" ] || fail "$png.png is not a PNG"

@@ -148,5 +148,30 @@ TEST(SafetyNet, FallsBackToDeadReckoningWhenNoSolutionPasses) {
   for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(s.result.graph.poses[i].isApprox(s.result.dr_poses[i]));
 }
 
+// A solution whose map agrees with itself less than dead reckoning's is not published, whatever
+// the graph said; one that agrees better is.
+TEST(SafetyNet, PublishesDeadReckoningWhenTheSolvedMapIsLessConsistent) {
+  Survey2Lines s = two_lines(10, 5);
+  PipelineResult& r = s.result;
+  r.optimized_poses = s.truth;
+  r.graph.poses = s.truth;
+  r.safety_net.ran = true;
+  r.dr_consistency.stats.rmse = 0.30;
+  r.dr_consistency.stats.p99 = 0.90;
+  r.consistency.stats.rmse = 0.10;
+  r.consistency.stats.p99 = 0.40;
+  fall_back_unless_more_consistent(r);
+  EXPECT_FALSE(r.safety_net.fell_back);
+  EXPECT_TRUE(r.optimized_poses[5].isApprox(s.truth[5]));
+
+  r.consistency.stats.p99 = 1.20;  // better on the whole, worse in the tail: not supported
+  fall_back_unless_more_consistent(r);
+  EXPECT_TRUE(r.safety_net.fell_back);
+  EXPECT_FALSE(r.safety_net.pass);
+  EXPECT_NE(r.safety_net.verdict.find("published dead reckoning"), std::string::npos);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(r.optimized_poses[i].isApprox(r.dr_poses[i]));
+  EXPECT_DOUBLE_EQ(r.consistency.stats.rmse, 0.30);
+}
+
 }  // namespace
 }  // namespace bathyslam
