@@ -26,6 +26,16 @@ double horizontal_pull_sigma(const PoseGraphEdge& edge, const std::vector<Eigen:
   return std::sqrt(std::max(0.0, m2));
 }
 
+// No registration enters the published map: each says so, so that the report's accepted edges
+// are those the map was made with.
+void publish_dead_reckoning(PipelineResult& r) {
+  r.graph.poses = r.dr_poses;
+  r.optimized_poses = r.dr_poses;
+  for (Constraint& c : r.constraints) {
+    if (c.type != ConstraintType::kOdometry && c.in_graph()) c.excluded = "safety net: dead reckoning published instead";
+  }
+}
+
 constexpr const char* kInconsistent = "inconsistent with the other registrations";
 
 std::string describe(const Constraint& c) {
@@ -115,7 +125,7 @@ void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
       net.verdict = format("FAILED after dropping %.0f registrations (%s): published dead reckoning instead",
                            static_cast<double>(net.dropped.size()),
                            net.check.pass ? "registrations still pulling against the solution" : "lines bent beyond their noise");
-      r.graph.poses = r.dr_poses;
+      publish_dead_reckoning(r);
       return;
     }
     Constraint& worst = r.constraints[owner[hardest]];
@@ -133,8 +143,7 @@ void fall_back_unless_more_consistent(PipelineResult& r) {
   r.safety_net.verdict = format("FAILED: the solved map agrees with itself less than dead reckoning's (consistency RMSE %.3f m "
                                 "against %.3f m, p99 %.3f m against %.3f m): published dead reckoning instead",
                                 solved.rmse, dr.rmse, solved.p99, dr.p99);
-  r.optimized_poses = r.dr_poses;
-  r.graph.poses = r.dr_poses;
+  publish_dead_reckoning(r);
   r.consistency = r.dr_consistency;
 }
 
