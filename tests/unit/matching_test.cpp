@@ -100,13 +100,20 @@ TEST(Acceptance, APairWithACompetingAlignmentOfHalfTheSupportIsAmbiguous) {
   r.ransac_inliers = 40;
   r.competitor_inliers = 10;
   r.competitor_separation_m = 8.0;
+  r.uniqueness.probed = true;  // and the terrain fits only at the answer
+  r.uniqueness.cost_at_answer_m2 = 0.001;
+  r.uniqueness.alternative_cost_m2 = 0.2;
   const Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
   EXPECT_EQ(rejection_reason(r, guess, {}, true), "");
   r.competitor_inliers = 20;
-  EXPECT_EQ(rejection_reason(r, guess, {}, true).rfind("ambiguous", 0), 0u);
+  EXPECT_EQ(rejection_reason(r, guess, {}, true).rfind("ambiguous (a second alignment", 0), 0u);
   AcceptanceConfig off;
   off.max_competitor_ratio = 0;
+  r.uniqueness.alternative_cost_m2 = 0.005;  // ambiguous terrain too, with its test off as well
+  off.min_distinctness = 0;
   EXPECT_EQ(rejection_reason(r, guess, off, true), "") << "0 turns the test off (the paper's method)";
+  r.competitor_inliers = 10;
+  EXPECT_EQ(rejection_reason(r, guess, {}, true).rfind("ambiguous (the terrain also fits", 0), 0u);
 }
 
 TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
@@ -193,6 +200,25 @@ TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGive
     for (int k : {0, 1, 5}) EXPECT_DOUBLE_EQ(d(k, k), share * f(k, k)) << "x, y, yaw: entry " << k;
     for (int k : {2, 3, 4}) EXPECT_DOUBLE_EQ(d(k, k), f(k, k)) << "z, roll, pitch: entry " << k;
   }
+}
+
+// A depth measured where the direct path guessed, on ripples whose misfit within 5 m of the
+// answer is 0.25 m², is worth no more than a 0.5 m sigma; on a flat bottom it keeps all it had.
+TEST(QualityWeights, ADirectEdgesDepthIsCappedByTheReliefAroundItsAnswer) {
+  PairRegistration direct;
+  direct.path = RegistrationPath::kDirect;
+  direct.inlier_ratio = 0.9;
+  direct.registration.quality.overlap_mse_m2 = 0.02;
+  direct.registration.quality.overlap_points = 12000;
+  direct.uniqueness.probed = true;
+  QualityConfig config;
+  direct.uniqueness.local_cost_m2 = 1e-4;
+  const double flat = quality_information(direct, config)(2, 2);
+  EXPECT_GT(flat, 100.0);
+  direct.uniqueness.local_cost_m2 = 0.25;
+  EXPECT_DOUBLE_EQ(quality_information(direct, config)(2, 2), 4.0);
+  config.direct_depth_from_relief = 0;
+  EXPECT_DOUBLE_EQ(quality_information(direct, config)(2, 2), flat) << "off, the paper's weight";
 }
 
 TEST(QualityWeights, FromTheHessianADirectEdgeKeepsWhatItsOverlapObserved) {
