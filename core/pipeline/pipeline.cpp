@@ -70,14 +70,13 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("accept.max_overlap_mse_m2", c.acceptance.max_overlap_mse_m2, 0, 1000);
   visit("accept.min_overlap_points", c.acceptance.min_overlap_points, 0, 10000000);
   visit("accept.max_translation_m", c.acceptance.max_translation_m, 0, 100000);
+  visit("accept.max_competitor_ratio", c.acceptance.max_competitor_ratio, 0, 1);
+  visit("ransac.competitor_separation_m", c.registration.ransac.competitor_separation_m, 0.01, 1000);
   visit("accept.min_distinctness", c.acceptance.min_distinctness, 0, 1e6);
   visit("uniqueness.search_radius_m", c.registration.uniqueness.search_radius_m, 1, 1000);
   visit("uniqueness.step_m", c.registration.uniqueness.step_m, 0.1, 100);
-  visit("uniqueness.local_radius_m", c.registration.uniqueness.local_radius_m, 0, 1000);
-  visit("quality.direct_depth_from_relief", c.quality.direct_depth_from_relief, 0, 1);
   visit("uniqueness.exclusion_m", c.registration.uniqueness.exclusion_m, 0, 1000);
-  visit("accept.max_competitor_ratio", c.acceptance.max_competitor_ratio, 0, 1);
-  visit("ransac.competitor_separation_m", c.registration.ransac.competitor_separation_m, 0.01, 1000);
+  visit("uniqueness.local_radius_m", c.registration.uniqueness.local_radius_m, 0, 1000);
   visit("quality.sigma_x_m", c.quality.best_sigma_translation_m.x(), 1e-4, 1e3);
   visit("quality.sigma_y_m", c.quality.best_sigma_translation_m.y(), 1e-4, 1e3);
   visit("quality.sigma_z_m", c.quality.best_sigma_translation_m.z(), 1e-4, 1e3);
@@ -85,6 +84,7 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("quality.sigma_pitch_rad", c.quality.best_sigma_rotation_rad.y(), 1e-6, 10);
   visit("quality.sigma_yaw_rad", c.quality.best_sigma_rotation_rad.z(), 1e-6, 10);
   visit("quality.direct_horizontal_share", c.quality.direct_horizontal_share, 0, 1);
+  visit("quality.direct_depth_from_relief", c.quality.direct_depth_from_relief, 0, 1);
   visit("quality.information_from_hessian", c.quality.information_from_hessian, 0, 1);
   visit("quality.hessian_full_share", c.quality.hessian_full_share, 1e-6, 1);
   visit("quality.hessian_zero_share", c.quality.hessian_zero_share, 0, 1);
@@ -270,6 +270,20 @@ std::string to_string(Configuration c) {
   return "?";
 }
 
+std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph) {
+  const Information6 dr_information = information_from_sigmas(graph.dr_sigma_translation_m, graph.dr_sigma_rotation_rad);
+  std::vector<Constraint> constraints;
+  for (const PoseGraphEdge& e : odometry_edges(dead_reckoning, dr_information)) {
+    Constraint c;
+    c.from = e.from;
+    c.to = e.to;
+    c.measured = e.measured;
+    c.information = e.information;
+    constraints.push_back(c);
+  }
+  return constraints;
+}
+
 std::string to_string(ConstraintType t) {
   switch (t) {
     case ConstraintType::kOdometry: return "odometry";
@@ -355,17 +369,7 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   clock.done("submaps");
   check(cancel);
 
-  // Odometry edges: consecutive submaps, DR relative pose, Table 1's DR information.
-  const Information6 dr_information =
-      information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad);
-  for (const PoseGraphEdge& e : odometry_edges(r.dr_poses, dr_information)) {
-    Constraint c;
-    c.from = e.from;
-    c.to = e.to;
-    c.measured = e.measured;
-    c.information = e.information;
-    r.constraints.push_back(c);
-  }
+  r.constraints = odometry_constraints(r.dr_poses, config.graph);
 
   if (config.configuration != Configuration::kOdometry) {
     report("filter", 0);

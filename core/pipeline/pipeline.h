@@ -102,7 +102,7 @@ struct Constraint {
   double inlier_ratio = 0;
   int competitor_inliers = 0;    // RANSAC's best distinct alternative
   double competitor_separation_m = 0;
-  Uniqueness uniqueness;         // feature-aided path: the terrain probed around the answer
+  Uniqueness uniqueness;         // the terrain probed around the answer (register/uniqueness.h)
   double dr_mahalanobis2 = -1;   // the DR gate's statistic (x, y, yaw); negative: not tested
   bool accepted = true;
   std::string reason;            // why a registration was rejected
@@ -121,6 +121,10 @@ struct SafetyNet {
   GraphCheck check;           // of the published solution (or of the last one tried)
   std::vector<std::string> dropped;  // each edge it dropped, with the reason
 };
+
+// Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information
+// (Table 1's by default).
+std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph);
 
 struct StageTiming {
   std::string stage;

@@ -80,14 +80,12 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       gates["competitor_separation_m"] = c.competitor_separation_m;
     }
     if (c.uniqueness.probed) {
-      {
-        gates["local_cost_m2"] = c.uniqueness.local_cost_m2;
-        gates["distinctness"] = c.uniqueness.distinctness();
-        gates["alternative_offset_m"] = {c.uniqueness.alternative_offset_m.x(), c.uniqueness.alternative_offset_m.y()};
-        gates["cost_at_answer_m2"] = c.uniqueness.cost_at_answer_m2;
-        gates["alternative_cost_m2"] = c.uniqueness.alternative_cost_m2;
-        gates["typical_cost_m2"] = c.uniqueness.typical_cost_m2;
-      }
+      gates["local_cost_m2"] = c.uniqueness.local_cost_m2;
+      gates["distinctness"] = c.uniqueness.distinctness();
+      gates["alternative_offset_m"] = {c.uniqueness.alternative_offset_m.x(), c.uniqueness.alternative_offset_m.y()};
+      gates["cost_at_answer_m2"] = c.uniqueness.cost_at_answer_m2;
+      gates["alternative_cost_m2"] = c.uniqueness.alternative_cost_m2;
+      gates["typical_cost_m2"] = c.uniqueness.typical_cost_m2;
     }
     j["gates"] = gates;
     auto error_json = [&](const Eigen::Isometry3d& measured) -> nlohmann::json {

@@ -78,13 +78,13 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
   }
 }
 
-GraphSolution solve(const std::vector<Eigen::Isometry3d>& dr_poses, const std::vector<Constraint>& constraints,
+GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
                     const GraphConfig& config) {
   std::vector<PoseGraphEdge> edges;
   for (const Constraint& c : constraints) {
     if (c.in_graph()) edges.push_back(edge_of(c));
   }
-  return optimize_pose_graph(dr_poses, edges, config);
+  return optimize_pose_graph(initial, edges, config);
 }
 
 void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {

@@ -21,8 +21,9 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
                                      const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config);
 
-// The graph of the constraints in it, solved from dead reckoning.
-GraphSolution solve(const std::vector<Eigen::Isometry3d>& dr_poses, const std::vector<Constraint>& constraints,
+// The graph of the constraints in it, solved from `initial` (dead reckoning, or a batch's
+// estimate).
+GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
                     const GraphConfig& config);
 
 // Solves, then tests the solution (graph_check.h): while a line's odometry residuals fail the

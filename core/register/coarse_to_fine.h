@@ -39,7 +39,9 @@ struct CoarseToFineConfig {
   RansacConfig ransac;
   GicpConfig gicp;
   double crop_margin_m = 1.0;
-  UniquenessConfig uniqueness;  // probed on the feature-aided path's answer
+  // Probed about either path's answer: the feature-aided path's acceptance and the direct
+  // path's depth information use it.
+  UniquenessConfig uniqueness;
   // The feature-aided path starts GICP within centimetres to a metre of the answer on textured
   // ground, where registering about the centroids with a refining pass at this gate reaches
   // a few centimetres and a tenth of a degree instead of Table 1's ~0.2 m and ~0.8 deg
@@ -66,7 +68,7 @@ struct PairRegistration {
   Eigen::Isometry3d coarse = Eigen::Isometry3d::Identity();  // where GICP started
   Registration registration;
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // centroid of the source overlap, source frame
-  Uniqueness uniqueness;  // feature-aided path: whether another offset fits nearly as well
+  Uniqueness uniqueness;  // whether another offset fits nearly as well, and the relief near the answer
   // Of the GICP cost at the result, about `anchor`, in the target frame; empty (no
   // correspondences) unless asked for or without a registration.
   GicpHessian hessian;

@@ -65,13 +65,13 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
       moved.push_back(source_to_target * Eigen::Vector3d(xy.x(), xy.y(), -source.elevation.at<float>(r, c)));
     }
   }
-  const Cost at_answer = cost_at(target, moved, Eigen::Vector2d::Zero());
-  if (at_answer.cells < 50) return u;
   // Only the cells that overlap at the answer take part, so every offset compares the same ground.
   std::vector<Eigen::Vector3d> overlap;
   for (const Eigen::Vector3d& p : moved) {
     if (!std::isnan(elevation_at(target, p.x(), p.y()))) overlap.push_back(p);
   }
+  const Cost at_answer = cost_at(target, overlap, Eigen::Vector2d::Zero());
+  if (at_answer.cells < 50) return u;
 
   const int reach = static_cast<int>(std::floor(config.search_radius_m / config.step_m));
   const int side = 2 * reach + 1;

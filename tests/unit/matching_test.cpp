@@ -184,12 +184,18 @@ TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
   for (int k = 0; k < 6; ++k) EXPECT_LT(a(k, k), b(k, k));
 }
 
-TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGiven) {
+// A direct-path registration with a good fit.
+PairRegistration direct_registration(double overlap_mse_m2, std::size_t overlap_points) {
   PairRegistration direct;
   direct.path = RegistrationPath::kDirect;
   direct.inlier_ratio = 0.9;
-  direct.registration.quality.overlap_mse_m2 = 0.1;
-  direct.registration.quality.overlap_points = 6000;
+  direct.registration.quality.overlap_mse_m2 = overlap_mse_m2;
+  direct.registration.quality.overlap_points = overlap_points;
+  return direct;
+}
+
+TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGiven) {
+  const PairRegistration direct = direct_registration(0.1, 6000);
   PairRegistration featured = direct;
   featured.path = RegistrationPath::kFeatureAided;
   QualityConfig config;
@@ -205,11 +211,7 @@ TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGive
 // A depth measured where the direct path guessed, on ripples whose misfit within 5 m of the
 // answer is 0.25 m², is worth no more than a 0.5 m sigma; on a flat bottom it keeps all it had.
 TEST(QualityWeights, ADirectEdgesDepthIsCappedByTheReliefAroundItsAnswer) {
-  PairRegistration direct;
-  direct.path = RegistrationPath::kDirect;
-  direct.inlier_ratio = 0.9;
-  direct.registration.quality.overlap_mse_m2 = 0.02;
-  direct.registration.quality.overlap_points = 12000;
+  PairRegistration direct = direct_registration(0.02, 12000);
   direct.uniqueness.probed = true;
   QualityConfig config;
   direct.uniqueness.local_cost_m2 = 1e-4;

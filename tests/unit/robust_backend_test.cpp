@@ -43,15 +43,7 @@ Survey2Lines two_lines(int n, uint64_t seed) {
     m.line = static_cast<int>(i) < n ? 0 : 1;
     r.submaps.submaps.push_back(m);
   }
-  const Information6 dr_information = information_from_sigmas(r.config.graph.dr_sigma_translation_m, r.config.graph.dr_sigma_rotation_rad);
-  for (const PoseGraphEdge& e : odometry_edges(r.dr_poses, dr_information)) {
-    Constraint c;
-    c.from = e.from;
-    c.to = e.to;
-    c.measured = e.measured;
-    c.information = e.information;
-    r.constraints.push_back(c);
-  }
+  r.constraints = odometry_constraints(r.dr_poses, r.config.graph);
   return s;
 }
 
