@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <thread>
 
 #include "bench/lake_bundle.h"
 #include "core/fuse/fuse.h"
@@ -77,7 +78,8 @@ BENCHMARK(BM_TilePyramid)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime
 // The pyramid written: a COG and a .vdb per tile.
 void BM_TileFiles(benchmark::State& state) {
   TileFileCount written;
-  for (auto _ : state) written = write_tile_files(g_input->map, g_input->crs, scratch() / "tiles");
+  for (auto _ : state) written = write_tile_files(g_input->map, g_input->crs, scratch() / "tiles",
+                               static_cast<int>(std::thread::hardware_concurrency()));
   report_tiles(state, written.tiles);
   state.counters["levels"] = written.levels;
 }

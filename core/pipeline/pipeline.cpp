@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "core/pipeline/parallel_for.h"
+#include "core/parallel/parallel_for.h"
 #include "core/pipeline/register_pairs.h"
 #include "core/pipeline/robust_backend.h"
 

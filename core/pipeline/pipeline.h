@@ -11,7 +11,7 @@
 #include "core/graph/graph_check.h"
 #include "core/graph/pose_graph.h"
 #include "core/pipeline/constraint.h"
-#include "core/pipeline/cancel.h"
+#include "core/parallel/cancel.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline_config.h"
 #include "core/submaps/submap.h"

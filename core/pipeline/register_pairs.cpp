@@ -1,6 +1,6 @@
 #include "core/pipeline/register_pairs.h"
 
-#include "core/pipeline/parallel_for.h"
+#include "core/parallel/parallel_for.h"
 #include "core/pipeline/robust_backend.h"
 
 namespace bathyslam {

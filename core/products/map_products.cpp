@@ -15,7 +15,7 @@ MapFiles write_map_products(const PipelineResult& result, const SurveyMetadata& 
   files.geometry = map.geometry;
   std::filesystem::create_directories(dir);
   write_geotiff(map, survey.crs, dir / "map.tif");
-  files.tiles = write_tile_files(map, survey.crs, dir / "tiles");
+  files.tiles = write_tile_files(map, survey.crs, dir / "tiles", plan_of(result.config).threads);
   for_each_tile(map, [&](const TileId& id, const GridRaster& tile) {
     files.tile_ids.push_back(id);
     write_file_bytes(dir / "tiles" / (tile_stem(id).string() + ".png"),

@@ -19,8 +19,9 @@ struct TileFileCount {
   int levels = 0;
 };
 
-// Writes every tile of the pyramid over `level0`; throws std::runtime_error naming the file
-// that could not be written.
-TileFileCount write_tile_files(const GridRaster& level0, std::string_view crs, const std::filesystem::path& dir);
+// Writes every tile of the pyramid over `level0` on `threads` threads; throws std::runtime_error
+// naming the file that could not be written.
+TileFileCount write_tile_files(const GridRaster& level0, std::string_view crs, const std::filesystem::path& dir,
+                               int threads = 1);
 
 }  // namespace bathyslam

@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "core/pipeline/corrected_navigation.h"
-#include "core/pipeline/parallel_for.h"
+#include "core/parallel/parallel_for.h"
 #include "core/pipeline/report.h"
 #include "core/sim/simulator.h"
 

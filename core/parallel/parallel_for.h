@@ -1,5 +1,5 @@
 #pragma once
-// The pipeline's one parallel loop: `threads` workers, cancellation checked before each
+// The one parallel loop of the core: `threads` workers, cancellation checked before each
 // iteration, and an exception inside an iteration carried out of the loop (an exception that
 // leaves an OpenMP region aborts the process) and rethrown after it.
 #include <atomic>
@@ -7,7 +7,7 @@
 #include <exception>
 #include <mutex>
 
-#include "core/pipeline/cancel.h"
+#include "core/parallel/cancel.h"
 
 namespace bathyslam {
 
