@@ -212,18 +212,33 @@ namespace {
 
 constexpr std::string_view kJobColumns =
     "SELECT j.id, j.survey_id, s.tenant_id, j.configuration, j.state, j.attempts, j.error, j.parameters,"
-    " extract(epoch FROM j.created_at)::float8, coalesce(extract(epoch FROM j.started_at)::float8, 0),"
-    " coalesce(extract(epoch FROM j.finished_at)::float8, 0), coalesce(e.stage, ''), coalesce(e.progress, 0)"
+    " extract(epoch FROM j.created_at)::float8 AS created_at,"
+    " coalesce(extract(epoch FROM j.started_at)::float8, 0) AS started_at,"
+    " coalesce(extract(epoch FROM j.finished_at)::float8, 0) AS finished_at,"
+    " coalesce(e.stage, '') AS stage, coalesce(e.progress, 0) AS progress"
     " FROM jobs j JOIN surveys s ON s.id = j.survey_id"
     " LEFT JOIN LATERAL (SELECT stage, progress FROM job_events WHERE job_id = j.id ORDER BY id DESC LIMIT 1) e ON true";
 
 std::vector<JobRecord> job_records(const Result& rows) {
   std::vector<JobRecord> jobs;
-  for (int row = 0; row < rows.rows(); ++row)
-    jobs.push_back({rows.int64(row, 0), rows.int64(row, 1), rows.int64(row, 2), std::string(rows.text(row, 3)),
-                    parse_job_state(rows.text(row, 4)), static_cast<int>(rows.int64(row, 5)), rows.optional_text(row, 6),
-                    nlohmann::json::parse(rows.text(row, 7)), rows.float8(row, 8), rows.float8(row, 9),
-                    rows.float8(row, 10), std::string(rows.text(row, 11)), rows.float8(row, 12)});
+  auto at = [&](const char* name) { return rows.column(name); };
+  for (int row = 0; row < rows.rows(); ++row) {
+    JobRecord job;
+    job.id = rows.int64(row, at("id"));
+    job.survey_id = rows.int64(row, at("survey_id"));
+    job.tenant_id = rows.int64(row, at("tenant_id"));
+    job.configuration = rows.text(row, at("configuration"));
+    job.state = parse_job_state(rows.text(row, at("state")));
+    job.attempts = static_cast<int>(rows.int64(row, at("attempts")));
+    job.error = rows.optional_text(row, at("error"));
+    job.parameters = nlohmann::json::parse(rows.text(row, at("parameters")));
+    job.created_at = rows.float8(row, at("created_at"));
+    job.started_at = rows.float8(row, at("started_at"));
+    job.finished_at = rows.float8(row, at("finished_at"));
+    job.stage = rows.text(row, at("stage"));
+    job.progress = rows.float8(row, at("progress"));
+    jobs.push_back(std::move(job));
+  }
   return jobs;
 }
 

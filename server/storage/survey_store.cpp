@@ -289,6 +289,39 @@ UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string&
   return state;
 }
 
+namespace {
+
+// A file being uploaded, as append_chunk finds it (locked).
+struct UploadRow {
+  std::int64_t file_id = 0, size = 0, committed = 0, chunks = 0;
+  bool complete = false, survey_finalized = false;
+  Bytes sha256;
+};
+
+UploadRow upload_row_of(const Result& r) {
+  return {r.int64(0, r.column("id")),          r.int64(0, r.column("size_bytes")), r.int64(0, r.column("committed_bytes")),
+          r.int64(0, r.column("chunk_count")), r.boolean(0, r.column("complete")), r.boolean(0, r.column("finalized")),
+          r.bytes(0, r.column("sha256"))};
+}
+
+// The upload rules: a chunk continues a file that is neither complete nor in a finalized survey,
+// exactly where its committed bytes end, and does not run past its declared size.
+void check_chunk(const UploadRow& file, std::int64_t survey_id, const std::string& name, std::int64_t offset,
+                 std::size_t bytes) {
+  if (file.survey_finalized) throw UploadError(UploadError::Kind::kFinalized, "survey " + std::to_string(survey_id) + " is finalized");
+  if (file.complete) throw UploadError(UploadError::Kind::kConflict, "'" + name + "' is complete already");
+  if (offset != file.committed)
+    throw UploadError(UploadError::Kind::kBadOffset, "offset: " + std::to_string(offset) + " but " +
+                                                         std::to_string(file.committed) + " bytes of '" + name +
+                                                         "' are committed; resume there");
+  const std::int64_t end = file.committed + static_cast<std::int64_t>(bytes);
+  if (end > file.size)
+    throw UploadError(UploadError::Kind::kInvalid, "data: '" + name + "' was declared " + std::to_string(file.size) +
+                                                       " bytes; this chunk would end at " + std::to_string(end));
+}
+
+}  // namespace
+
 UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset,
                                       const Bytes& data) {
   if (data.size() > chunk_bytes_)
@@ -296,25 +329,18 @@ UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string&
                       "data: a chunk holds at most " + std::to_string(chunk_bytes_) + " bytes, got " + std::to_string(data.size()));
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
-  Result file = connection->exec(
-      "SELECT f.id, f.size_bytes, f.committed_bytes, f.complete, f.sha256, f.chunk_count, coalesce(v.valid, false)"
+  const Result found = connection->exec(
+      "SELECT f.id, f.size_bytes, f.committed_bytes, f.complete, f.sha256, f.chunk_count,"
+      " coalesce(v.valid, false) AS finalized"
       " FROM survey_files f LEFT JOIN survey_validations v ON v.survey_id = f.survey_id"
       " WHERE f.survey_id = $1 AND f.name = $2 FOR UPDATE OF f",
       {survey_id, name});
-  if (file.rows() == 0)
+  if (found.rows() == 0)
     throw UploadError(UploadError::Kind::kNotFound, "survey " + std::to_string(survey_id) + " has no upload of '" + name + "'");
-  const std::int64_t file_id = file.int64(0, 0), size = file.int64(0, 1), committed = file.int64(0, 2);
-  const std::int64_t chunks = file.int64(0, 5);
-  if (file.boolean(0, 6)) throw UploadError(UploadError::Kind::kFinalized, "survey " + std::to_string(survey_id) + " is finalized");
-  if (file.boolean(0, 3)) throw UploadError(UploadError::Kind::kConflict, "'" + name + "' is complete already");
-  if (offset != committed)
-    throw UploadError(UploadError::Kind::kBadOffset, "offset: " + std::to_string(offset) + " but " +
-                                                         std::to_string(committed) + " bytes of '" + name +
-                                                         "' are committed; resume there");
-  const std::int64_t now_committed = committed + static_cast<std::int64_t>(data.size());
-  if (now_committed > size)
-    throw UploadError(UploadError::Kind::kInvalid, "data: '" + name + "' was declared " + std::to_string(size) +
-                                                       " bytes; this chunk would end at " + std::to_string(now_committed));
+  const UploadRow file = upload_row_of(found);
+  check_chunk(file, survey_id, name, offset, data.size());
+  const std::int64_t file_id = file.file_id, size = file.size, chunks = file.chunks;
+  const std::int64_t now_committed = file.committed + static_cast<std::int64_t>(data.size());
   std::int64_t chunk_count = chunks;
   if (!data.empty()) {
     connection->exec("INSERT INTO survey_file_chunks (file_id, seq, data) VALUES ($1, $2, $3)", {file_id, chunks, data});
@@ -325,14 +351,14 @@ UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string&
     Sha256Stream digest;
     for_each_chunk(*connection, file_id, chunk_count, name, [&](const Bytes& bytes) { digest.add(bytes); });
     const Sha256 received = digest.finish();
-    if (received != to_sha256(file.bytes(0, 4))) {
+    if (received != to_sha256(file.sha256)) {
       // Discarded and committed before throwing, so that a retry starts from zero.
       connection->exec("DELETE FROM survey_file_chunks WHERE file_id = $1", {file_id});
       connection->exec("UPDATE survey_files SET committed_bytes = 0, chunk_count = 0 WHERE id = $1", {file_id});
       transaction.commit();
       throw UploadError(UploadError::Kind::kChecksum,
                         "sha256: the " + std::to_string(size) + " bytes received of '" + name + "' hash to " + hex(received) +
-                            ", not the declared " + hex(to_sha256(file.bytes(0, 4))) + "; the upload was discarded");
+                            ", not the declared " + hex(to_sha256(file.sha256)) + "; the upload was discarded");
     }
     complete = true;
   }
