@@ -25,3 +25,10 @@ UPDATE constraints SET
 WHERE NOT accepted;
 
 ALTER TABLE constraints ADD CONSTRAINT constraints_accepted_has_no_rejection CHECK (accepted = (rejection = 'none'));
+
+-- Jobs stored before the stages became parameters: `gicp` and `odometry` ignored the batches and
+-- the robustness defences whatever their stored values said; now those values would apply. Keep
+-- them meaning what they meant when the job was submitted.
+UPDATE jobs SET parameters = parameters ||
+    '{"batch_submaps": 0, "robust.dr_gate": 0, "robust.consistency": 0, "robust.safety_net": 0}'::jsonb
+WHERE configuration IN ('gicp', 'odometry') AND parameters ? 'batch_submaps';
