@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "client/commands.h"
+#include "client/survey_options.h"
 #include "core/io/bundle.h"
 #include "core/io/survey_input.h"
 #include "core/summary/survey_summary.h"
@@ -12,9 +13,7 @@ namespace bathyslam::cli {
 namespace {
 
 struct InspectOptions {
-  std::vector<std::string> inputs;
-  std::string crs;
-  std::string reference_nav;
+  SurveyOptions survey;
   bool json = false;
 };
 
@@ -33,11 +32,7 @@ void inspect_bundle(const std::string& bundle, bool json) {
 // GSF: what each file holds (pings, ignored pings, rejected beams, records), then the survey
 // bathyslam makes of them.
 void inspect_gsf(const InspectOptions& o) {
-  SurveyInput input;
-  input.paths.assign(o.inputs.begin(), o.inputs.end());
-  input.crs = o.crs;
-  if (!o.reference_nav.empty()) input.reference_nav = o.reference_nav;
-  const LoadedSurvey loaded = load_survey(input);
+  const LoadedSurvey loaded = load_survey(o.survey.input());
   const SurveySummary summary = summarize(loaded.survey);
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();
@@ -50,11 +45,12 @@ void inspect_gsf(const InspectOptions& o) {
 }
 
 void run_inspect(const InspectOptions& o) {
-  if (o.inputs.size() == 1 && !gsf::is_gsf_path(o.inputs.front())) {
-    if (!o.crs.empty() || !o.reference_nav.empty()) {
+  const std::vector<std::string>& inputs = o.survey.inputs;
+  if (inputs.size() == 1 && !gsf::is_gsf_path(inputs.front())) {
+    if (!o.survey.crs.empty() || !o.survey.reference_nav.empty()) {
       throw std::runtime_error("--crs and --reference-nav are for GSF input");
     }
-    inspect_bundle(o.inputs.front(), o.json);
+    inspect_bundle(inputs.front(), o.json);
   } else {
     inspect_gsf(o);
   }
@@ -65,11 +61,7 @@ void run_inspect(const InspectOptions& o) {
 void add_inspect_command(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
   CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle or GSF files) and summarise it");
-  cmd->add_option("survey", options->inputs,
-                  "a survey bundle (a folder or a .tar of one), or one or more .gsf files in time order")
-      ->required();
-  cmd->add_option("--crs", options->crs, "GSF: projected CRS of the map frame (default: the data's UTM zone)");
-  cmd->add_option("--reference-nav", options->reference_nav, "GSF: reference navigation in the nav.csv format");
+  add_survey_options(cmd, options->survey);
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->callback([options] { run_inspect(*options); });
 }

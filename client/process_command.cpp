@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "client/commands.h"
+#include "client/survey_options.h"
 #include "core/fuse/fuse.h"
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
-#include "core/io/survey_input.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "core/tiles/geotiff_writer.h"
@@ -20,9 +20,7 @@ namespace bathyslam::cli {
 namespace {
 
 struct ProcessOptions {
-  std::vector<std::string> inputs;
-  std::string crs;
-  std::string reference_nav;
+  SurveyOptions survey;
   std::string config = "gicp";
   std::vector<std::string> sets;
   int threads = 0;
@@ -59,11 +57,7 @@ void run_process(const ProcessOptions& o) {
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  SurveyInput input;
-  input.paths.assign(o.inputs.begin(), o.inputs.end());
-  input.crs = o.crs;
-  if (!o.reference_nav.empty()) input.reference_nav = o.reference_nav;
-  const Survey survey = load_survey(input).survey;
+  const Survey survey = load_survey(o.survey.input()).survey;
   std::string last_stage;
   const PipelineResult result = run_pipeline(survey, config, [&](std::string_view stage, double fraction) {
     if (stage != last_stage) {
@@ -98,11 +92,7 @@ void run_process(const ProcessOptions& o) {
 void add_process_command(CLI::App& app) {
   auto options = std::make_shared<ProcessOptions>();
   CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey offline");
-  cmd->add_option("survey", options->inputs,
-                  "a survey bundle (a folder or a .tar of one), or one or more .gsf files in time order")
-      ->required();
-  cmd->add_option("--crs", options->crs, "GSF: projected CRS of the map frame (default: the data's UTM zone)");
-  cmd->add_option("--reference-nav", options->reference_nav, "GSF: reference navigation in the nav.csv format");
+  add_survey_options(cmd, options->survey);
   cmd->add_option("--config", options->config, "odometry, gicp or mchs")
       ->check(CLI::IsMember({"odometry", "gicp", "mchs"}))
       ->capture_default_str();

@@ -11,16 +11,16 @@
 
 #include "core/io/gsf/big_endian.h"
 #include "core/io/gsf/gsf_survey.h"
+#include "tests/unit/gsf_test_files.h"
 
 namespace bathyslam::gsf {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-const fs::path kData = BATHYSLAM_GSF_DATA;
-const fs::path kEx1811 = kData / "EX1811_EM302_0059_20181102_212138.gsf";
-const fs::path kGsfpy = kData / "gsfpy_test_data.gsf";
+using test::kEx1811;
+using test::kGsfpy;
+using test::pings_of;
 
 std::string bytes_of(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -30,18 +30,7 @@ std::string bytes_of(const fs::path& path) {
 
 std::vector<Record> read_all_records(std::string_view bytes) {
   MemorySource source(bytes);
-  Reader reader(source, "test.gsf");
-  std::vector<Record> records;
-  while (auto r = reader.next()) records.push_back(std::move(*r));
-  return records;
-}
-
-std::vector<Ping> pings_of(const std::vector<Record>& records) {
-  std::vector<Ping> pings;
-  for (const Record& r : records) {
-    if (const auto* p = std::get_if<Ping>(&r)) pings.push_back(*p);
-  }
-  return pings;
+  return test::records_of(source, "test.gsf");
 }
 
 // 2018-11-02 00:00:00 UTC and the day after.

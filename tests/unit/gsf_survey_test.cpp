@@ -11,6 +11,7 @@
 #include "core/io/gsf/gsf_writer.h"
 #include "core/sync/nav_interpolation.h"
 #include "core/types/pose.h"
+#include "tests/unit/gsf_test_files.h"
 
 namespace bathyslam::gsf {
 namespace {
@@ -18,23 +19,12 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-const fs::path kData = BATHYSLAM_GSF_DATA;
-const fs::path kEx1811 = kData / "EX1811_EM302_0059_20181102_212138.gsf";
-const fs::path kGsfpy = kData / "gsfpy_test_data.gsf";
+using test::kEx1811;
+using test::kGsfpy;
 
 fs::path temp_path(const std::string& name) {
   return fs::temp_directory_path() /
          ("bathyslam_gsf_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + name);
-}
-
-std::vector<Ping> pings_in(const fs::path& path) {
-  FileSource source(path);
-  Reader reader(source, path.string());
-  std::vector<Ping> pings;
-  while (auto r = reader.next()) {
-    if (auto* p = std::get_if<Ping>(&*r)) pings.push_back(std::move(*p));
-  }
-  return pings;
 }
 
 Eigen::Vector3d georeference(const Survey& survey, const bathyslam::Ping& ping, const Beam& beam) {
@@ -53,7 +43,8 @@ TEST(GsfSurvey, Ex1811SoundingsLandWhereTheGsfFilePutsThem) {
   EXPECT_EQ(s.metadata.sonar["sound_velocity_profiles"].size(), 1u);
   EXPECT_TRUE(s.metadata.sonar["processing_parameters"].contains("REFERENCE TIME"));
 
-  const std::vector<Ping> gsf = pings_in(kEx1811);
+  FileSource source(kEx1811);
+  const std::vector<Ping> gsf = test::pings_of(test::records_of(source, kEx1811.string()));
   for (std::size_t i = 0; i < s.pings.size(); ++i) {
     const Ping& g = gsf[i];
     EXPECT_DOUBLE_EQ(s.pings[i].time, g.time);
