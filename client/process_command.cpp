@@ -12,6 +12,7 @@
 #include "core/io/file_bytes.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
+#include "core/tiles/bag_writer.h"
 #include "core/tiles/geotiff_writer.h"
 #include "core/tiles/quicklook.h"
 #include "core/tiles/tile_files.h"
@@ -38,8 +39,9 @@ std::string write_map_products(const Survey& survey, const PipelineResult& resul
   write_geotiff(map, crs, out / "map.tif");
   const TileFileCount tiles = write_tile_files(map, crs, out / "tiles");
   const std::string name = to_string(result.config.configuration);
+  write_bag(map, crs, map_bag_metadata(survey.metadata.name, name), out / "map.bag");
   write_file_bytes(out / "map.png", hillshade_png(map, survey.metadata.name + " (" + name + ")"));
-  std::string written = "map.tif, map.png, " + std::to_string(tiles.tiles) + " tiles on " +
+  std::string written = "map.tif, map.bag, map.png, " + std::to_string(tiles.tiles) + " tiles on " +
                         std::to_string(tiles.levels) + " levels";
   if (result.config.configuration != Configuration::kOdometry) {
     const GridRaster dr_map = fuse_submaps(result.submaps, result.dr_poses, fuse);
@@ -83,7 +85,7 @@ void run_process(const ProcessOptions& o) {
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_summary(result).c_str());
   std::printf("map %.2f m cells: %s (%.1f s)\n", o.fuse.resolution_m, map_files.c_str(), fuse_seconds);
-  std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, tiles/}\n", seconds + fuse_seconds,
+  std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
               o.out.c_str());
 }
 
