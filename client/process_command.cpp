@@ -8,8 +8,10 @@
 #include "client/commands.h"
 #include "client/survey_options.h"
 #include "core/fuse/fuse.h"
+#include "core/fuse/soundings_csv.h"
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
+#include "core/io/gsf/gsf_survey.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "core/tiles/bag_writer.h"
@@ -26,6 +28,8 @@ struct ProcessOptions {
   std::vector<std::string> sets;
   int threads = 0;
   FuseConfig fuse;
+  bool export_gsf = false;
+  bool export_soundings = false;
   std::string out;
 };
 
@@ -72,7 +76,8 @@ void run_process(const ProcessOptions& o) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::filesystem::create_directories(o.out);
-  write_nav_csv(corrected_navigation(survey, result), std::filesystem::path(o.out) / "trajectory.csv");
+  const std::vector<NavSample> corrected = corrected_navigation(survey, result);
+  write_nav_csv(corrected, std::filesystem::path(o.out) / "trajectory.csv");
   const nlohmann::json report = report_json(result);
   {
     std::ofstream out(std::filesystem::path(o.out) / "report.json");
@@ -84,6 +89,15 @@ void run_process(const ProcessOptions& o) {
   const std::string map_files = write_map_products(survey, result, o.fuse, o.out);
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_summary(result).c_str());
+  if (o.export_gsf) {
+    const std::uint64_t pings = gsf::write_survey(survey, corrected, std::filesystem::path(o.out) / "corrected.gsf");
+    std::printf("corrected.gsf: %llu pings with the corrected navigation\n", static_cast<unsigned long long>(pings));
+  }
+  if (o.export_soundings) {
+    const std::uint64_t n =
+        write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");
+    std::printf("soundings.csv: %llu corrected soundings\n", static_cast<unsigned long long>(n));
+  }
   std::printf("map %.2f m cells: %s (%.1f s)\n", o.fuse.resolution_m, map_files.c_str(), fuse_seconds);
   std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
               o.out.c_str());
@@ -106,6 +120,10 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--min-soundings", options->fuse.min_soundings, "fewer soundings in a cell: no data")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  cmd->add_flag("--export-gsf", options->export_gsf,
+                "also write corrected.gsf: the pings with the corrected navigation");
+  cmd->add_flag("--export-soundings", options->export_soundings,
+                "also write soundings.csv: every corrected sounding (easting,northing,elevation,line,submap)");
   cmd->add_option("--out", options->out, "output folder")->required();
   cmd->callback([options] { run_process(*options); });
 }
