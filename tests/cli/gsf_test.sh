@@ -63,4 +63,30 @@ assert all(abs(a - b) < 1e-6 for a, b in zip(bag["geoTransform"], tif["geoTransf
 assert [b["description"] for b in bag["bands"]] == ["elevation", "uncertainty"], bag["bands"]
 assert all(b["noDataValue"] == 1000000.0 for b in bag["bands"]), bag["bands"]
 PY
+# lake, the paper's survey, as a 236 MB GSF file: its BAG has the GeoTIFF's grid and values.
+"$BATHYSLAM" simulate --scenario lake --seed 1 --format gsf --out "$work/lake" > /dev/null
+rm -rf "$work/bundle" "$work/gsf" "$work/pb" "$work/pg"
+"$BATHYSLAM" process "$work/lake/survey.gsf" --config odometry --out "$work/lo" > /dev/null 2>&1
+gdalinfo -json "$work/lo/map.bag" > "$work/lbag.json"
+gdalinfo -json "$work/lo/map.tif" > "$work/ltif.json"
+/usr/bin/python3 - "$work/lbag.json" "$work/ltif.json" <<'PY'
+import json, sys
+bag, tif = (json.load(open(p)) for p in sys.argv[1:])
+assert "UTM zone 51N" in bag["coordinateSystem"]["wkt"]
+assert bag["size"] == tif["size"] and bag["size"][0] > 1500, (bag["size"], tif["size"])
+assert all(abs(a - b) < 1e-6 for a, b in zip(bag["geoTransform"], tif["geoTransform"]))
+PY
+for xy in "0 0" "800 400" "300 200" "1200 600"; do
+  # shellcheck disable=SC2086
+  tif=$(gdallocationinfo -valonly "$work/lo/map.tif" $xy | head -2 | tr '\n' ' ')
+  # shellcheck disable=SC2086
+  bag=$(gdallocationinfo -valonly "$work/lo/map.bag" $xy | tr '\n' ' ')
+  /usr/bin/python3 - "$tif" "$bag" <<'PY'
+import math, sys
+tif, bag = ([float(v) for v in a.split()] for a in sys.argv[1:])
+assert len(tif) == 2 and len(bag) == 2, (tif, bag)
+for t, b in zip(tif, bag):
+    assert (math.isnan(t) and b == 1e6) or abs(t - b) < 1e-5, (tif, bag)
+PY
+done
 echo "gsf cli: ok"
