@@ -137,7 +137,7 @@ class SurveyBuilder {
     }
     if (p.ignored()) return;
     const Eigen::Matrix3d level_to_vehicle = tilt(p.roll_deg, p.pitch_deg).transpose();
-    Ping_ ping{p.time, static_cast<std::uint32_t>(survey_.beams.size()), 0};
+    bathyslam::Ping ping{p.time, static_cast<std::uint32_t>(survey_.beams.size()), 0};
     for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) {
       if (!usable_beam(p, b)) continue;
       const Eigen::Vector3d level(along_of(p, b), p.across_m[b], p.depth_m[b] - p.depth_corrector_m);
@@ -150,7 +150,6 @@ class SurveyBuilder {
   }
 
  private:
-  using Ping_ = bathyslam::Ping;
   Survey& survey_;
   std::string crs_;
   std::unique_ptr<GeographicProjection> projection_;
@@ -285,7 +284,11 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
     ProblemList problems;
     const std::string name = options.reference_nav->string();
     std::vector<NavSample> reference = parse_nav_csv(source, name, problems);
-    if (problems.has_errors()) throw BundleError(problems.take());
+    if (problems.has_errors()) {
+      std::string why = "reference navigation is not in the nav.csv format:";
+      for (const Problem& p : problems.take()) why += "\n  " + p.to_string();
+      throw std::runtime_error(why);
+    }
     out.survey.reference_nav = std::move(reference);
   }
   return out;
