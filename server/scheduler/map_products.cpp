@@ -3,6 +3,7 @@
 #include <charconv>
 #include <fstream>
 
+#include "core/tiles/bag_writer.h"
 #include "core/tiles/geotiff_writer.h"
 #include "core/tiles/quicklook.h"
 #include "core/tiles/tile_files.h"
@@ -37,6 +38,8 @@ MapProducts make_map_products(const PipelineResult& result, const SurveyMetadata
 
   write_geotiff(map, survey.crs, dir / "map.tif");
   products.tiles.push_back({{"cog", 0, 0, 0}, file_bytes(dir / "map.tif")});
+  write_bag(map, survey.crs, map_bag_metadata(survey.name, to_string(result.config.configuration)), dir / "map.bag");
+  products.tiles.push_back({{"bag", 0, 0, 0}, file_bytes(dir / "map.bag")});
   const TileFileCount count = write_tile_files(map, survey.crs, dir / "tiles");
   // The same pyramid as the files: every tile with data, a PNG quicklook next to its .tif/.vdb.
   for_each_tile(map, [&](const TileId& id, const GridRaster& tile) {

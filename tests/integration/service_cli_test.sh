@@ -56,7 +56,8 @@ done
 "$BATHYSLAM" report "$job" --json | python3 -c 'import json, sys; r = json.load(sys.stdin); assert r["configuration"] == "gicp"'
 "$BATHYSLAM" jobs | grep -Eq "^ +$job +$survey +gicp +succeeded" || fail "jobs: $("$BATHYSLAM" jobs)"
 
-# The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG.
+# The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG
+# and as a BAG.
 "$BATHYSLAM" tiles "$job" --out "$work/tiles" > "$work/tiles.out" || fail "tiles"
 all=$(awk '{print $1}' "$work/tiles.out")
 [ "$all" -gt 1 ] || fail "$(cat "$work/tiles.out")"
@@ -70,6 +71,11 @@ e=$(( ${col_row%_*} * 256 + 128 )) n=$(( ${col_row#*_} * 256 + 128 ))
 [ "$(find "$work/box" -name '*.tif' | wc -l)" -lt "$all" ] || fail "the box fetched every tile"
 "$BATHYSLAM" map "$job" --out "$work/map.tif" > /dev/null || fail "map"
 gdalinfo "$work/map.tif" | grep -q "LAYOUT=COG" || fail "map.tif is not a COG"
+"$BATHYSLAM" map "$job" --format bag --out "$work/map.bag" > /dev/null || fail "map --format bag"
+gdalinfo "$work/map.bag" | grep -q "^Driver: BAG" || fail "map.bag is not a BAG"
+gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the survey's CRS"
+[ "$(gdalinfo "$work/map.bag" | grep '^Size is')" = "$(gdalinfo "$work/map.tif" | grep '^Size is')" ] ||
+  fail "map.bag and map.tif differ in size"
 [ -f "$work/report/map_difference.png" ] || fail "no map difference plot"
 
 # Tokens: another tenant sees none of this; a wrong token is refused.
