@@ -78,6 +78,29 @@ gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the sur
   fail "map.bag and map.tif differ in size"
 [ -f "$work/report/map_difference.png" ] || fail "no map difference plot"
 
+# GSF: real files given in the wrong order are put in time order by the server; a truncated
+# one is refused naming its record and byte; a simulated GSF survey with its reference
+# navigation runs as a job.
+"$BATHYSLAM" upload "$GSF_DATA/EX1811_EM302_0059_20181102_212138.gsf" "$GSF_DATA/gsfpy_test_data.gsf" --name real-gsf \
+  > "$work/gsf1" 2> "$work/gsf1.err" || fail "GSF upload: $(cat "$work/gsf1.err")"
+grep -Eq "^survey [0-9]+ ready$" "$work/gsf1" || fail "$(cat "$work/gsf1")"
+head -c 5000 "$GSF_DATA/gsfpy_test_data.gsf" > "$work/cut.gsf"
+if "$BATHYSLAM" upload "$work/cut.gsf" 2> "$work/cut.err"; then fail "a truncated GSF file was accepted"; fi
+grep -q "cut.gsf: record 7 at byte 4000: truncated" "$work/cut.err" || fail "$(cat "$work/cut.err")"
+"$BATHYSLAM" simulate --scenario small --seed 4 --format gsf --out "$work/simgsf" > /dev/null
+"$BATHYSLAM" upload "$work/simgsf/survey.gsf" --reference-nav "$work/simgsf/reference_nav.csv" --name sim-gsf \
+  > "$work/gsf2" 2> "$work/gsf2.err" || fail "GSF upload: $(cat "$work/gsf2.err")"
+gsf_survey=$(awk '/^survey .* ready$/ {print $2}' "$work/gsf2")
+gsf_job=$("$BATHYSLAM" submit "$gsf_survey" --config odometry | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$gsf_job" > "$work/gsf_watch" 2> /dev/null || fail "watch: $(cat "$work/gsf_watch")"
+grep -q "job $gsf_job succeeded" "$work/gsf_watch" || fail "$(cat "$work/gsf_watch")"
+"$BATHYSLAM" report "$gsf_job" --json | /usr/bin/python3 -c '
+import json, sys
+r = json.load(sys.stdin)
+assert r["trajectory_error_m"]["optimized"]["rmse"] > 0, r["trajectory_error_m"]' || fail "GSF job report"
+"$BATHYSLAM" map "$gsf_job" --format bag --out "$work/gsf.bag" > /dev/null || fail "map --format bag of the GSF job"
+gdalinfo "$work/gsf.bag" | grep -q "UTM zone 51N" || fail "the GSF job's BAG is not in the data's UTM zone"
+
 # Tokens: another tenant sees none of this; a wrong token is refused.
 token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)
 [ "$(BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs | wc -l)" = 1 ] || fail "another tenant sees jobs"

@@ -73,6 +73,22 @@ TEST(GsfSurvey, FilesOutOfTimeOrderAreRefused) {
   }
 }
 
+TEST(GsfSurvey, FilesOfUnknownOrderAreOrderedByTheirFirstPing) {
+  EXPECT_EQ(in_time_order({kEx1811, kGsfpy}), (std::vector<fs::path>{kGsfpy, kEx1811}));
+  EXPECT_EQ(in_time_order({kGsfpy, kEx1811}), (std::vector<fs::path>{kGsfpy, kEx1811}));
+}
+
+TEST(GsfSurvey, UploadedFileNamesArePlainGsfNames) {
+  EXPECT_TRUE(is_gsf_file_name("EX1811_EM302_0059_20181102_212138.gsf"));
+  EXPECT_TRUE(is_gsf_file_name("line-2.GSF"));
+  EXPECT_FALSE(is_gsf_file_name("../survey.gsf"));
+  EXPECT_FALSE(is_gsf_file_name("a/b.gsf"));
+  EXPECT_FALSE(is_gsf_file_name(".gsf"));
+  EXPECT_FALSE(is_gsf_file_name("survey.gsf.tmp"));
+  EXPECT_FALSE(is_gsf_file_name("line 2.gsf"));
+  EXPECT_FALSE(is_gsf_file_name(""));
+}
+
 // A survey with turns, roll and pitch, and beams spread across 120 degrees, in UTM 51N.
 Survey turning_survey() {
   Survey s;

@@ -1,6 +1,7 @@
 #include "core/io/gsf/gsf_survey.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -339,6 +340,34 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
   }
   writer.close();
   return writer.pings_written();
+}
+
+std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files) {
+  constexpr double kNoPing = std::numeric_limits<double>::infinity();
+  std::vector<std::pair<double, std::filesystem::path>> timed;
+  for (std::filesystem::path& path : files) {
+    FileSource source(path);
+    Reader reader(source, path.string());
+    double first = kNoPing;
+    while (const auto record = reader.next()) {
+      if (const auto* ping = std::get_if<Ping>(&*record)) {
+        first = ping->time;
+        break;
+      }
+    }
+    timed.emplace_back(first, std::move(path));
+  }
+  std::sort(timed.begin(), timed.end());
+  std::vector<std::filesystem::path> ordered;
+  for (auto& [time, path] : timed) ordered.push_back(std::move(path));
+  return ordered;
+}
+
+bool is_gsf_file_name(const std::string& name) {
+  if (name.empty() || name.size() > 200 || name.front() == '.' || !is_gsf_path(name)) return false;
+  return std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
+  });
 }
 
 bool is_gsf_path(const std::filesystem::path& path) {

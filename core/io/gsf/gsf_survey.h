@@ -59,6 +59,10 @@ struct SurveyRead {
 // std::runtime_error for pings out of time order or an unusable CRS.
 SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const ReadOptions& options = {});
 
+// `files` ordered by the time of their first ping (files without a ping last, by name), for
+// files whose order nobody gave (a service upload). Reads each file up to its first ping.
+std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files);
+
 // The summary of one file alone, without building a survey (constant memory).
 FileSummary summarize_file(ByteSource& source, const std::string& file);
 
@@ -70,5 +74,9 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
 
 // Whether `path` names a GSF file (by its extension, as the tools that write it name them).
 bool is_gsf_path(const std::filesystem::path& path);
+
+// Whether `name` may name an uploaded GSF file: a plain file name ending in .gsf, of letters,
+// digits, '.', '_' and '-', not starting with '.', at most 200 characters (it becomes a path).
+bool is_gsf_file_name(const std::string& name);
 
 }  // namespace bathyslam::gsf
