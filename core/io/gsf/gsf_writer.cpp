@@ -13,16 +13,17 @@ namespace {
 
 struct ArrayEncoding {
   std::uint8_t id;
+  const char* name;
   int width;  // bytes
   bool is_signed;
   std::int32_t multiplier;
 };
 
-constexpr ArrayEncoding kDepth{kDepthArray, 4, false, 1000};
-constexpr ArrayEncoding kAcross{kAcrossTrackArray, 4, true, 1000};
-constexpr ArrayEncoding kAlong{kAlongTrackArray, 4, true, 1000};
-constexpr ArrayEncoding kTravelTime{kTravelTimeArray, 4, false, 1000000};
-constexpr ArrayEncoding kBeamAngle{kBeamAngleArray, 2, true, 100};
+constexpr ArrayEncoding kDepth{kDepthArray, "depth", 4, false, 1000};
+constexpr ArrayEncoding kAcross{kAcrossTrackArray, "across-track", 4, true, 1000};
+constexpr ArrayEncoding kAlong{kAlongTrackArray, "along-track", 4, true, 1000};
+constexpr ArrayEncoding kTravelTime{kTravelTimeArray, "travel time", 4, false, 1000000};
+constexpr ArrayEncoding kBeamAngle{kBeamAngleArray, "beam angle", 2, true, 100};
 
 // Rounds `value` to an integer field of `width` bytes; throws naming the field when it does not fit.
 std::int64_t to_field(double value, double multiplier, int width, bool is_signed, const std::string& what) {
@@ -108,18 +109,17 @@ void Writer::write(const ProcessingParameters& parameters) {
 void Writer::write(const Ping& ping) {
   const std::string what = path_.string() + ": ping " + std::to_string(pings_ + 1) + ":";
   const auto n = static_cast<std::size_t>(ping.num_beams);
-  auto check_size = [&](const auto& array, const char* name) {
-    if (!array.empty() && array.size() != n) {
-      throw std::runtime_error(what + " " + name + " array has " + std::to_string(array.size()) + " values for " +
+  const std::pair<const ArrayEncoding*, const std::vector<double>*> arrays[] = {
+      {&kDepth, &ping.depth_m},           {&kAcross, &ping.across_m},        {&kAlong, &ping.along_m},
+      {&kTravelTime, &ping.travel_time_s}, {&kBeamAngle, &ping.beam_angle_deg}};
+  auto check_size = [&](std::size_t size, const char* name) {
+    if (size != 0 && size != n) {
+      throw std::runtime_error(what + " " + name + " array has " + std::to_string(size) + " values for " +
                                std::to_string(n) + " beams");
     }
   };
-  check_size(ping.depth_m, "depth");
-  check_size(ping.across_m, "across-track");
-  check_size(ping.along_m, "along-track");
-  check_size(ping.travel_time_s, "travel-time");
-  check_size(ping.beam_angle_deg, "beam-angle");
-  check_size(ping.beam_flags, "beam-flags");
+  for (const auto& [encoding, values] : arrays) check_size(values->size(), encoding->name);
+  check_size(ping.beam_flags.size(), "beam flags");
 
   std::vector<std::uint8_t> data;
   put_time(data, ping.time);
@@ -145,9 +145,6 @@ void Writer::write(const Ping& ping) {
   put_i32(data, 0);  // GPS tide corrector
   put_i16(data, 0);  // spare
 
-  const std::pair<const ArrayEncoding*, const std::vector<double>*> arrays[] = {
-      {&kDepth, &ping.depth_m},           {&kAcross, &ping.across_m},        {&kAlong, &ping.along_m},
-      {&kTravelTime, &ping.travel_time_s}, {&kBeamAngle, &ping.beam_angle_deg}};
   std::vector<std::uint8_t> present;
   for (const auto& [encoding, values] : arrays) {
     if (!values->empty()) present.push_back(encoding->id);
@@ -173,9 +170,8 @@ void Writer::write(const Ping& ping) {
     }
     scaled_arrays_ = present;
   }
-  const char* names[] = {"depth", "across-track", "along-track", "travel time", "beam angle"};
-  for (std::size_t i = 0; i < std::size(arrays); ++i) {
-    if (!arrays[i].second->empty()) put_array(data, *arrays[i].first, *arrays[i].second, what + " " + names[i]);
+  for (const auto& [encoding, values] : arrays) {
+    if (!values->empty()) put_array(data, *encoding, *values, what + " " + encoding->name);
   }
   if (!ping.beam_flags.empty()) {
     put_u32(data, (std::uint32_t{kBeamFlagsArray} << 24) | static_cast<std::uint32_t>(n));
