@@ -12,6 +12,7 @@
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
 #include "core/io/gsf/gsf_survey.h"
+#include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "core/tiles/bag_writer.h"
@@ -56,6 +57,24 @@ std::string write_map_products(const Survey& survey, const PipelineResult& resul
   return written;
 }
 
+// GSF input: each file copied with the corrected navigation in its ping headers
+// (OUT/<name>.corrected.gsf); a bundle: its pings written as OUT/corrected.gsf.
+void export_gsf(const ProcessOptions& o, const Survey& survey, const std::vector<NavSample>& corrected) {
+  const std::filesystem::path out(o.out);
+  if (!gsf::is_gsf_path(o.survey.inputs.front())) {
+    const std::uint64_t pings = gsf::write_survey(survey, corrected, out / "corrected.gsf");
+    std::printf("corrected.gsf: %llu pings with the corrected navigation\n", static_cast<unsigned long long>(pings));
+    return;
+  }
+  for (const std::filesystem::path input : o.survey.inputs) {
+    const std::string name = input.stem().string() + ".corrected.gsf";
+    const gsf::RewriteCount n = gsf::rewrite_navigation(input, out / name, corrected, survey.metadata.crs);
+    std::printf("%s: %llu of %llu pings with the corrected navigation, all %llu records kept\n", name.c_str(),
+                static_cast<unsigned long long>(n.rewritten), static_cast<unsigned long long>(n.pings),
+                static_cast<unsigned long long>(n.records));
+  }
+}
+
 void run_process(const ProcessOptions& o) {
   PipelineConfig config;
   config.configuration = parse_configuration(o.config);
@@ -89,10 +108,7 @@ void run_process(const ProcessOptions& o) {
   const std::string map_files = write_map_products(survey, result, o.fuse, o.out);
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_summary(result).c_str());
-  if (o.export_gsf) {
-    const std::uint64_t pings = gsf::write_survey(survey, corrected, std::filesystem::path(o.out) / "corrected.gsf");
-    std::printf("corrected.gsf: %llu pings with the corrected navigation\n", static_cast<unsigned long long>(pings));
-  }
+  if (o.export_gsf) export_gsf(o, survey, corrected);
   if (o.export_soundings) {
     const std::uint64_t n =
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");
@@ -121,7 +137,8 @@ void add_process_command(CLI::App& app) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_flag("--export-gsf", options->export_gsf,
-                "also write corrected.gsf: the pings with the corrected navigation");
+                "also write the pings with the corrected navigation: GSF input file by file "
+                "(NAME.corrected.gsf, every record kept), a bundle as corrected.gsf");
   cmd->add_flag("--export-soundings", options->export_soundings,
                 "also write soundings.csv: every corrected sounding (easting,northing,elevation,line,submap)");
   cmd->add_option("--out", options->out, "output folder")->required();

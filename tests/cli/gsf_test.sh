@@ -40,14 +40,18 @@ grep -q "survey.gsf (4588 pings) and reference_nav.csv" "$work/sim.txt"
 "$BATHYSLAM" process "$work/bundle" --config odometry --out "$work/pb" > /dev/null 2>&1
 "$BATHYSLAM" process "$work/gsf/survey.gsf" --reference-nav "$work/gsf/reference_nav.csv" --config odometry \
   --export-gsf --export-soundings --out "$work/pg" > "$work/pg.txt" 2> /dev/null
-grep -q "corrected.gsf: 4588 pings" "$work/pg.txt"
+grep -q "survey.corrected.gsf: 4588 of 4588 pings with the corrected navigation, all 4590 records kept" "$work/pg.txt"
 grep -q "soundings.csv: 2349056 corrected soundings" "$work/pg.txt"
 /usr/bin/python3 - "$work/pb/report.json" "$work/pg/report.json" <<'PY'
 import json, sys
 b, g = (json.load(open(p))["trajectory_error_m"]["optimized"]["rmse"] for p in sys.argv[1:])
 assert abs(g - b) <= 0.01 * b, (b, g)
 PY
-"$BATHYSLAM" inspect "$work/pg/corrected.gsf" | grep -q "soundings   2349056 of 2349056 beams"
+"$BATHYSLAM" inspect "$work/pg/survey.corrected.gsf" | grep -q "soundings   2349056 of 2349056 beams"
+# A bundle's pings exported as GSF.
+"$BATHYSLAM" process "$work/bundle" --config odometry --export-gsf --out "$work/pbx" 2> /dev/null |
+  grep -q "corrected.gsf: 4588 pings with the corrected navigation"
+"$BATHYSLAM" inspect "$work/pbx/corrected.gsf" | grep -q "soundings   2349056 of 2349056 beams"
 head -1 "$work/pg/soundings.csv" | grep -qx "easting,northing,elevation,line,submap"
 
 # The BAG beside the GeoTIFF: same CRS, same grid, BAG's null value.
@@ -65,7 +69,7 @@ assert all(b["noDataValue"] == 1000000.0 for b in bag["bands"]), bag["bands"]
 PY
 # lake, the paper's survey, as a 236 MB GSF file: its BAG has the GeoTIFF's grid and values.
 "$BATHYSLAM" simulate --scenario lake --seed 1 --format gsf --out "$work/lake" > /dev/null
-rm -rf "$work/bundle" "$work/gsf" "$work/pb" "$work/pg"
+rm -rf "$work/bundle" "$work/gsf" "$work/pb" "$work/pg" "$work/pbx"
 "$BATHYSLAM" process "$work/lake/survey.gsf" --config odometry --out "$work/lo" > /dev/null 2>&1
 gdalinfo -json "$work/lo/map.bag" > "$work/lbag.json"
 gdalinfo -json "$work/lo/map.tif" > "$work/ltif.json"

@@ -9,6 +9,7 @@
 #include "core/fuse/fuse.h"
 #include "core/fuse/soundings_csv.h"
 #include "core/io/gsf/gsf_survey.h"
+#include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/pipeline.h"
 #include "core/sim/simulator.h"
 
@@ -58,6 +59,27 @@ class GsfExport : public ::testing::Test {
     delete result_;
     delete simulation_;
   }
+  // A corrected GSF file read back and fused with its own navigation, no SLAM, must give the
+  // SLAM map back: cell differences within the sounding noise, far below dead reckoning's.
+  static void expect_slam_map_from(const fs::path& corrected_gsf, const char* what) {
+    const Survey corrected = gsf::read_survey({corrected_gsf}).survey;
+    const FuseConfig fuse;
+    const GridRaster slam_map = fuse_submaps(result_->submaps, result_->optimized_poses, fuse);
+    const SubmapSet corrected_submaps = build_submaps(corrected);
+    std::vector<Eigen::Isometry3d> poses;
+    for (const Submap& s : corrected_submaps.submaps) poses.push_back(s.dr_pose);
+    const GridRaster gsf_map = fuse_submaps(corrected_submaps, poses, fuse);
+    const GridRaster dr_map = fuse_submaps(result_->submaps, result_->dr_poses, fuse);
+
+    const CellDifferences d = compare(slam_map, gsf_map);
+    const CellDifferences before = compare(slam_map, dr_map);
+    ASSERT_GT(d.cells, slam_map.valid_cells() * 9 / 10);
+    // Sounding noise at 10 m: 0.05 m + 0.2 % of depth = 0.07 m.
+    EXPECT_LT(d.rms_m, 0.07) << "max " << d.max_m << " m over " << d.cells << " cells";
+    EXPECT_GT(before.rms_m, 2 * d.rms_m) << "dead reckoning rms " << before.rms_m;
+    std::printf("%s vs SLAM map: rms %.4f m, max %.3f m over %zu cells (dead reckoning: rms %.4f m)\n", what,
+                d.rms_m, d.max_m, d.cells, before.rms_m);
+  }
   static fs::path temp(const std::string& name) { return fs::temp_directory_path() / ("bathyslam_gsf_export_" + name); }
 
   static sim::Simulation* simulation_;
@@ -66,33 +88,27 @@ class GsfExport : public ::testing::Test {
 sim::Simulation* GsfExport::simulation_ = nullptr;
 PipelineResult* GsfExport::result_ = nullptr;
 
+
 TEST_F(GsfExport, CorrectedGsfPlacesSoundingsWhereTheFusedMapHasThem) {
   const Survey& survey = simulation_->survey;
   const fs::path path = temp("corrected.gsf");
   gsf::write_survey(survey, corrected_navigation(survey, *result_), path);
-  const Survey corrected = gsf::read_survey({path}).survey;
+  expect_slam_map_from(path, "corrected.gsf");
   fs::remove(path);
+}
 
-  // The corrected survey's own navigation, with no SLAM, must give the SLAM map back.
-  const FuseConfig fuse;
-  const GridRaster slam_map = fuse_submaps(result_->submaps, result_->optimized_poses, fuse);
-  const SubmapSet corrected_submaps = build_submaps(corrected);
-  const GridRaster gsf_map = fuse_submaps(corrected_submaps, [&] {
-    std::vector<Eigen::Isometry3d> poses;
-    for (const Submap& s : corrected_submaps.submaps) poses.push_back(s.dr_pose);
-    return poses;
-  }(), fuse);
-  const GridRaster dr_map = fuse_submaps(result_->submaps, result_->dr_poses, fuse);
-
-  const CellDifferences d = compare(slam_map, gsf_map);
-  const CellDifferences before = compare(slam_map, dr_map);
-  ASSERT_GT(d.cells, slam_map.valid_cells() * 9 / 10);
-  // Sounding noise at 10 m: 0.05 m + 0.2 % of depth = 0.07 m.
-  EXPECT_LT(d.rms_m, 0.07) << "max " << d.max_m << " m over " << d.cells << " cells";
-  // And the export really carries the correction: dead reckoning's map differs far more.
-  EXPECT_GT(before.rms_m, 2 * d.rms_m) << "dead reckoning rms " << before.rms_m;
-  std::printf("corrected GSF vs SLAM map: rms %.4f m, max %.3f m over %zu cells (dead reckoning: rms %.4f m)\n",
-              d.rms_m, d.max_m, d.cells, before.rms_m);
+// GSF in, GSF out: the survey as a GSF file with dead reckoning, then that file with the
+// corrected navigation in its ping headers (depths untouched).
+TEST_F(GsfExport, RewrittenGsfPlacesSoundingsWhereTheFusedMapHasThem) {
+  const Survey& survey = simulation_->survey;
+  const fs::path dr = temp("dr.gsf"), corrected = temp("dr.corrected.gsf");
+  gsf::write_survey(survey, survey.nav, dr);
+  const gsf::RewriteCount n = gsf::rewrite_navigation(dr, corrected, corrected_navigation(survey, *result_),
+                                                      survey.metadata.crs);
+  EXPECT_EQ(n.rewritten, survey.pings.size());
+  expect_slam_map_from(corrected, "dr.corrected.gsf");
+  fs::remove(dr);
+  fs::remove(corrected);
 }
 
 TEST_F(GsfExport, SoundingsCsvHoldsEveryCorrectedSoundingInCrsCoordinates) {

@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 #include "core/io/gsf/gsf_reader.h"
 #include "core/io/gsf/gsf_writer.h"
+#include "core/io/gsf/navigation_rewrite.h"
 #include "core/sync/nav_interpolation.h"
 #include "core/types/pose.h"
 #include "tests/unit/gsf_test_files.h"
@@ -87,6 +90,55 @@ TEST(GsfSurvey, UploadedFileNamesArePlainGsfNames) {
   EXPECT_FALSE(is_gsf_file_name("survey.gsf.tmp"));
   EXPECT_FALSE(is_gsf_file_name("line 2.gsf"));
   EXPECT_FALSE(is_gsf_file_name(""));
+}
+
+TEST(GsfSurvey, RewrittenNavigationMovesThePingsAndKeepsEveryOtherByte) {
+  const Survey original = read_survey({kEx1811}).survey;
+  std::vector<NavSample> moved = original.nav;
+  for (NavSample& n : moved) {
+    n.easting += 10.0;
+    n.northing -= 4.0;
+    n.heading_deg = std::fmod(n.heading_deg + 1.5, 360.0);
+  }
+  const fs::path path = temp_path(".gsf");
+  const RewriteCount count = rewrite_navigation(kEx1811, path, moved, original.metadata.crs);
+  EXPECT_EQ(count.records, 73748u);
+  EXPECT_EQ(count.pings, 50u);
+  EXPECT_EQ(count.rewritten, 50u);
+  EXPECT_EQ(fs::file_size(path), fs::file_size(kEx1811));
+  {  // Only the 10 bytes of position and heading in each of the 50 ping headers may differ.
+    std::ifstream fa(kEx1811, std::ios::binary), fb(path, std::ios::binary);
+    const std::string ba{std::istreambuf_iterator<char>(fa), {}}, bb{std::istreambuf_iterator<char>(fb), {}};
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < ba.size() && i < bb.size(); ++i) differing += ba[i] != bb[i];
+    EXPECT_GT(differing, 50u);
+    EXPECT_LE(differing, 50u * 10u);
+  }
+
+  FileSource a_source(kEx1811), b_source(path);
+  const std::vector<Record> a = test::records_of(a_source, "original"), b = test::records_of(b_source, "rewritten");
+  ASSERT_EQ(a.size(), b.size());
+  const Survey back = read_survey({path}, {original.metadata.crs, std::nullopt}).survey;
+  fs::remove(path);
+  std::size_t ping = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].index(), b[i].index()) << "record " << i + 1;
+    if (const auto* pa = std::get_if<Ping>(&a[i])) {
+      const Ping& pb = std::get<Ping>(b[i]);
+      EXPECT_EQ(pb.time, pa->time);
+      EXPECT_EQ(pb.depth_m, pa->depth_m);
+      EXPECT_EQ(pb.across_m, pa->across_m);
+      EXPECT_EQ(pb.beam_flags, pa->beam_flags);
+      EXPECT_EQ(pb.roll_deg, pa->roll_deg);
+      EXPECT_NEAR(std::remainder(pb.heading_deg - pa->heading_deg - 1.5, 360.0), 0.0, 0.006);
+      EXPECT_NEAR(back.nav[ping].easting - original.nav[ping].easting, 10.0, 0.01);
+      EXPECT_NEAR(back.nav[ping].northing - original.nav[ping].northing, -4.0, 0.01);
+      ++ping;
+    } else if (const auto* aa = std::get_if<Attitude>(&a[i])) {
+      EXPECT_EQ(std::get<Attitude>(b[i]).roll_deg, aa->roll_deg);
+    }
+  }
+  EXPECT_EQ(ping, 50u);
 }
 
 // A survey with turns, roll and pitch, and beams spread across 120 degrees, in UTM 51N.

@@ -78,6 +78,7 @@ std::optional<Record> Reader::next() {
   BigEndianCursor cursor(std::span<const std::uint8_t>(framing, kFramingBytes));
   const std::uint32_t size = cursor.u32();
   const std::uint32_t id = cursor.u32();
+  id_ = id;
   const bool has_checksum = (id >> 31) != 0;
   const std::uint32_t reserved = (id >> 22) & 0x1ff;
   const std::uint32_t registry = (id >> 12) & 0x3ff;

@@ -51,6 +51,10 @@ class Reader {
 
   std::uint64_t records_read() const { return record_number_; }
   std::uint64_t bytes_read() const { return offset_; }
+  // The last record as stored: its identifier word and its data (without framing or checksum),
+  // for tools that copy records through unchanged.
+  std::uint32_t record_id() const { return id_; }
+  const std::vector<std::uint8_t>& record_data() const { return data_; }
   const Header& header() const { return header_; }
 
  private:
@@ -62,6 +66,7 @@ class Reader {
   std::string file_;
   std::uint64_t offset_ = 0;         // of the next record
   std::uint64_t record_number_ = 0;  // of the record being read
+  std::uint32_t id_ = 0;             // the current record's identifier word
   std::vector<std::uint8_t> data_;   // the current record's data, reused
   Header header_;
   // Scale factors apply from the ping that carries them until replaced (section 4.3.4).

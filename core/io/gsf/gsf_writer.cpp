@@ -1,7 +1,6 @@
 #include "core/io/gsf/gsf_writer.h"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -61,11 +60,12 @@ void put_array(std::vector<std::uint8_t>& out, const ArrayEncoding& e, const std
 
 }  // namespace
 
-Writer::Writer(const std::filesystem::path& path) : path_(path), temporary_(path.string() + ".partial") {
+Writer::Writer(const std::filesystem::path& path, const std::string& version)
+    : path_(path), temporary_(path.string() + ".partial") {
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
   if (!out_) throw std::runtime_error(path_.string() + ": cannot write");
-  std::vector<std::uint8_t> header(12, 0);
-  std::memcpy(header.data(), kWrittenVersion, std::strlen(kWrittenVersion));
+  std::vector<std::uint8_t> header(version.begin(), version.end());
+  header.resize(12, 0);  // the version field is 12 characters, NUL-padded
   write_record(kHeader, header);
 }
 
@@ -77,11 +77,18 @@ Writer::~Writer() {
   }
 }
 
+void Writer::write_raw(std::uint32_t id, std::vector<std::uint8_t> data) { write_record(id, data); }
+
 void Writer::write_record(std::uint32_t id, std::vector<std::uint8_t>& data) {
   while (data.size() % 4 != 0) data.push_back(0);  // records are whole 4-byte words
   std::vector<std::uint8_t> framing;
   put_u32(framing, static_cast<std::uint32_t>(data.size()));
-  put_u32(framing, id);  // registry 0, no checksum
+  put_u32(framing, id);
+  if ((id >> 31) != 0) {  // checksum flag: the sum of the data bytes follows the identifier
+    std::uint32_t sum = 0;
+    for (std::uint8_t b : data) sum += b;
+    put_u32(framing, sum);
+  }
   out_.write(reinterpret_cast<const char*>(framing.data()), static_cast<std::streamsize>(framing.size()));
   out_.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
   if (!out_) throw std::runtime_error(path_.string() + ": write failed");

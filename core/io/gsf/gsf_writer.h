@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <vector>
 
 #include "core/io/gsf/gsf_records.h"
@@ -20,9 +21,9 @@ inline constexpr const char* kWrittenVersion = "GSF-v03.11";
 
 class Writer {
  public:
-  // Starts `path` (under a temporary name) with the header record; throws std::runtime_error
-  // naming the path when it cannot.
-  explicit Writer(const std::filesystem::path& path);
+  // Starts `path` (under a temporary name) with the header record of `version`; throws
+  // std::runtime_error naming the path when it cannot.
+  explicit Writer(const std::filesystem::path& path, const std::string& version = kWrittenVersion);
   ~Writer();  // an unclosed writer removes its temporary file
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
@@ -31,6 +32,9 @@ class Writer {
   void write(const ProcessingParameters& parameters);
   // Throws std::runtime_error naming the ping when a value does not fit its field.
   void write(const Ping& ping);
+  // A record as another file stored it (`id` as its identifier word, checksum recomputed when
+  // flagged): copies what this writer does not decode.
+  void write_raw(std::uint32_t id, std::vector<std::uint8_t> data);
   // Flushes and renames the file into place.
   void close();
 
