@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "core/io/gsf/big_endian.h"
 #include "core/io/gsf/gsf_reader.h"
 #include "core/io/gsf/gsf_writer.h"
 #include "core/io/gsf/navigation_rewrite.h"
@@ -79,6 +80,17 @@ TEST(GsfSurvey, FilesOutOfTimeOrderAreRefused) {
 TEST(GsfSurvey, FilesOfUnknownOrderAreOrderedByTheirFirstPing) {
   EXPECT_EQ(in_time_order({kEx1811, kGsfpy}), (std::vector<fs::path>{kGsfpy, kEx1811}));
   EXPECT_EQ(in_time_order({kGsfpy, kEx1811}), (std::vector<fs::path>{kGsfpy, kEx1811}));
+}
+
+TEST(GsfSurvey, HeadingsAreStoredInHundredthsWithinOneTurn) {
+  EXPECT_EQ(heading_field(0.0), 0);
+  EXPECT_EQ(heading_field(180.004), 18000);
+  EXPECT_EQ(heading_field(359.994), 35999);
+  EXPECT_EQ(heading_field(359.996), 0);  // rounds to 360.00, which is 0
+  EXPECT_EQ(heading_field(360.0), 0);
+  EXPECT_EQ(heading_field(-0.004), 0);
+  EXPECT_EQ(heading_field(-0.01), 35999);
+  EXPECT_EQ(heading_field(725.5), 550);
 }
 
 TEST(GsfSurvey, UploadedFileNamesArePlainGsfNames) {

@@ -1,6 +1,7 @@
 #pragma once
 // Big-endian integers, the only byte order GSF has (specification section 3.6.2): a bounds-checked
 // cursor over a record's bytes for reading, and appending helpers for writing.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -77,6 +78,13 @@ class BigEndianCursor {
   std::size_t pos_ = 0;
 };
 
+// A heading or course as GSF stores it: hundredths of a degree in [0, 36000). The wrap comes
+// after rounding so that 359.999 is stored as 0, not as the out-of-range 36000.
+inline std::uint16_t heading_field(double degrees) {
+  const double hundredths = std::fmod(std::round(degrees * 100.0), 36000.0);
+  return static_cast<std::uint16_t>(hundredths < 0 ? hundredths + 36000.0 : hundredths);
+}
+
 inline void put_u8(std::vector<std::uint8_t>& out, std::uint8_t v) { out.push_back(v); }
 inline void put_u16(std::vector<std::uint8_t>& out, std::uint16_t v) {
   out.push_back(static_cast<std::uint8_t>(v >> 8));
@@ -87,6 +95,10 @@ inline void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
   for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
 }
 inline void put_i32(std::vector<std::uint8_t>& out, std::int32_t v) { put_u32(out, static_cast<std::uint32_t>(v)); }
+inline void patch_u16(std::vector<std::uint8_t>& out, std::size_t at, std::uint16_t v) {
+  out[at] = static_cast<std::uint8_t>(v >> 8);
+  out[at + 1] = static_cast<std::uint8_t>(v);
+}
 // Overwrites a u32 written earlier (a size known only once what follows is written).
 inline void patch_u32(std::vector<std::uint8_t>& out, std::size_t at, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out[at + i] = static_cast<std::uint8_t>(v >> (24 - 8 * i));

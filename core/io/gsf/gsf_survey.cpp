@@ -13,6 +13,7 @@
 
 #include "core/io/bundle.h"
 #include "core/io/crs.h"
+#include "core/io/gsf/big_endian.h"
 #include "core/io/gsf/gsf_reader.h"
 #include "core/io/gsf/gsf_writer.h"
 #include "core/sync/nav_interpolation.h"
@@ -314,7 +315,7 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
     const auto ll = projection.inverse(at->easting, at->northing);
     p.longitude_deg = ll.longitude_deg;
     p.latitude_deg = ll.latitude_deg;
-    p.heading_deg = std::fmod(centi(at->heading_deg) + 720.0, 360.0);
+    p.heading_deg = heading_field(at->heading_deg) / 100.0;
     p.course_deg = p.heading_deg;
     p.pitch_deg = centi(at->pitch_deg);
     p.roll_deg = centi(at->roll_deg);

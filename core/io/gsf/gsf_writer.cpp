@@ -138,14 +138,11 @@ void Writer::write(const Ping& ping) {
   put_i16(data, 0);  // reserved
   put_i16(data, static_cast<std::int16_t>(to_field(ping.tide_corrector_m, 100, 2, true, what + " tide corrector")));
   put_i32(data, static_cast<std::int32_t>(to_field(ping.depth_corrector_m, 100, 4, true, what + " depth corrector")));
-  // Heading wraps into [0, 360) before rounding so that 359.999 is stored as 0, not 36000.
-  const double heading_cdeg = std::fmod(std::round(ping.heading_deg * 100) + 36000.0 * 4, 36000.0);
-  put_u16(data, static_cast<std::uint16_t>(heading_cdeg));
+  put_u16(data, heading_field(ping.heading_deg));
   put_i16(data, static_cast<std::int16_t>(to_field(ping.pitch_deg, 100, 2, true, what + " pitch")));
   put_i16(data, static_cast<std::int16_t>(to_field(ping.roll_deg, 100, 2, true, what + " roll")));
   put_i16(data, static_cast<std::int16_t>(to_field(ping.heave_m, 100, 2, true, what + " heave")));
-  const double course_cdeg = std::fmod(std::round(ping.course_deg * 100) + 36000.0 * 4, 36000.0);
-  put_u16(data, static_cast<std::uint16_t>(course_cdeg));
+  put_u16(data, heading_field(ping.course_deg));
   put_u16(data, static_cast<std::uint16_t>(to_field(ping.speed_knots, 100, 2, false, what + " speed")));
   put_i32(data, 0);  // height above the ellipsoid: unknown
   put_i32(data, 0);  // separation

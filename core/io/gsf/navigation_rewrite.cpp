@@ -17,11 +17,6 @@ constexpr std::size_t kLongitudeAt = 8;
 constexpr std::size_t kLatitudeAt = 12;
 constexpr std::size_t kHeadingAt = 30;
 
-void patch_u16(std::vector<std::uint8_t>& data, std::size_t at, std::uint16_t v) {
-  data[at] = static_cast<std::uint8_t>(v >> 8);
-  data[at + 1] = static_cast<std::uint8_t>(v);
-}
-
 }  // namespace
 
 RewriteCount rewrite_navigation(const std::filesystem::path& input, const std::filesystem::path& output,
@@ -42,8 +37,7 @@ RewriteCount rewrite_navigation(const std::filesystem::path& input, const std::f
         const auto ll = projection.inverse(at->easting, at->northing);
         patch_u32(data, kLongitudeAt, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(ll.longitude_deg * 1e7))));
         patch_u32(data, kLatitudeAt, static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(ll.latitude_deg * 1e7))));
-        const double heading_cdeg = std::fmod(std::round(at->heading_deg * 100) + 36000.0 * 4, 36000.0);
-        patch_u16(data, kHeadingAt, static_cast<std::uint16_t>(heading_cdeg));
+        patch_u16(data, kHeadingAt, heading_field(at->heading_deg));
         ++count.rewritten;
       }
     }
