@@ -7,7 +7,7 @@
 // --edges takes the pairs from a report.json instead: its accepted registrations only, at the
 // truth, direct-path adjacent ones with depth, roll and pitch only, as `mchs` weighs them. This
 // separates what the front end got wrong from what the terrain never offered.
-// key=value: pipeline parameters, e.g. graph.dr_sigma_yaw_rad=0.005.
+// key=value: pipeline parameters, e.g. graph.dr_sigma_rotation_rad.yaw=0.005.
 #include <cstdio>
 #include <exception>
 #include <string>

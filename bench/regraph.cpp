@@ -4,7 +4,7 @@
 // depend on the weights, so this is how weights are compared across seeds in seconds.
 //   bench_regraph BUNDLE REPORT [--uniform] [key=value ...]
 // key=value: pipeline parameters over the run's own (report.json "parameters"), e.g.
-// gicp.sigma_x_m=2 graph.huber_delta=0.5.
+// uniform_information.sigma_translation_m.x=2 graph.huber_delta=0.5.
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -39,7 +39,8 @@ int main(int argc, char** argv) try {
   std::vector<PoseGraphEdge> edges = odometry_edges(
       dr, information_from_sigmas(config.graph.dr_sigma_translation_m, config.graph.dr_sigma_rotation_rad));
   const Information6 uniform_information =
-      information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
+      information_from_sigmas(config.uniform_information.sigma_translation_m,
+                              config.uniform_information.sigma_rotation_rad);
   std::size_t used = 0;
   for (const bench::ReportRegistration& r : report.registrations) {
     if (!r.accepted) continue;

@@ -46,7 +46,7 @@ Report read_report(const std::string& path, int submaps) {
   nlohmann::json registrations;
   try {
     const nlohmann::json parsed = nlohmann::json::parse(in);
-    report.config.configuration = parse_configuration(parsed.at("configuration").get<std::string>());
+    report.config = preset_config(parse_configuration(parsed.at("configuration").get<std::string>()));
     for (const auto& [key, value] : parsed.at("parameters").items()) {
       set_parameter(report.config, key, value.get<double>());
     }

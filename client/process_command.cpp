@@ -13,12 +13,10 @@
 #include "core/io/file_bytes.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/gsf/navigation_rewrite.h"
+#include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
-#include "core/tiles/bag_writer.h"
-#include "core/tiles/geotiff_writer.h"
-#include "core/tiles/quicklook.h"
-#include "core/tiles/tile_files.h"
+#include "core/products/map_products.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -33,29 +31,6 @@ struct ProcessOptions {
   bool export_soundings = false;
   std::string out;
 };
-
-// map.tif, tiles/{level}/{col}_{row}.tif|.vdb and map.png from the optimized poses; with a SLAM
-// configuration also map_difference.png against the dead-reckoning map (where drift was removed).
-std::string write_map_products(const Survey& survey, const PipelineResult& result, const FuseConfig& fuse,
-                               const std::filesystem::path& out) {
-  const GridRaster map = fuse_submaps(result.submaps, result.optimized_poses, fuse);
-  if (map.valid_cells() == 0) return "no map (no cell has enough soundings)";
-  const std::string& crs = survey.metadata.crs;
-  write_geotiff(map, crs, out / "map.tif");
-  const TileFileCount tiles = write_tile_files(map, crs, out / "tiles");
-  const std::string name = to_string(result.config.configuration);
-  write_bag(map, crs, map_bag_metadata(survey.metadata.name, name), out / "map.bag");
-  write_file_bytes(out / "map.png", hillshade_png(map, survey.metadata.name + " (" + name + ")"));
-  std::string written = "map.tif, map.bag, map.png, " + std::to_string(tiles.tiles) + " tiles on " +
-                        std::to_string(tiles.levels) + " levels";
-  if (result.config.configuration != Configuration::kOdometry) {
-    const GridRaster dr_map = fuse_submaps(result.submaps, result.dr_poses, fuse);
-    write_file_bytes(out / "map_difference.png",
-                     difference_png(map, dr_map, name + " minus dead reckoning, elevation"));
-    written += ", map_difference.png";
-  }
-  return written;
-}
 
 // GSF input: each file copied with the corrected navigation in its ping headers
 // (OUT/<name>.corrected.gsf); a bundle: its pings written as OUT/corrected.gsf.
@@ -76,8 +51,7 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const std::vector
 }
 
 void run_process(const ProcessOptions& o) {
-  PipelineConfig config;
-  config.configuration = parse_configuration(o.config);
+  PipelineConfig config = preset_config(parse_configuration(o.config));
   config.threads = o.threads;
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
@@ -105,9 +79,9 @@ void run_process(const ProcessOptions& o) {
   }
   write_report_plots(result, o.out);
   const auto fuse_start = std::chrono::steady_clock::now();
-  const std::string map_files = write_map_products(survey, result, o.fuse, o.out);
+  const std::string map_files = write_map_products(result, survey.metadata, o.fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
-  std::printf("%s", report_summary(result).c_str());
+  std::printf("%s", report_text(result).c_str());
   if (o.export_gsf) export_gsf(o, survey, corrected);
   if (o.export_soundings) {
     const std::uint64_t n =
@@ -126,7 +100,7 @@ void add_process_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey offline");
   add_survey_options(cmd, options->survey);
   cmd->add_option("--config", options->config, "odometry, gicp or mchs")
-      ->check(CLI::IsMember({"odometry", "gicp", "mchs"}))
+      ->check(CLI::IsMember(std::vector<std::string>(kConfigurationNames.begin(), kConfigurationNames.end())))
       ->capture_default_str();
   cmd->add_option("--set", options->sets, "override a parameter: key=value (repeatable)");
   cmd->add_option("--threads", options->threads, "registration threads (0: all cores)")->capture_default_str();

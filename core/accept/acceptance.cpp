@@ -26,34 +26,37 @@ double piecewise(const std::array<std::pair<double, double>, N>& knots, double x
 
 }  // namespace
 
-std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
-                             bool loop_closure) {
+Rejection rejection_of(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
+                       bool loop_closure) {
+  using enum RejectionKind;
   const RegistrationQuality& q = r.registration.quality;
-  if (loop_closure && r.path == RegistrationPath::kDirect) return "loop closure without features (" + r.why + ")";
-  if (q.overlap_points == 0) return "no overlapping points";
-  if (!q.converged) return "GICP did not converge";
-  if (r.inlier_ratio < config.min_inlier_ratio) return format("inlier ratio %.2f < %.2f", r.inlier_ratio, config.min_inlier_ratio);
-  if (q.overlap_mse_m2 > config.max_overlap_mse_m2) return format("overlap MSE %.2f m2 > %.2f m2", q.overlap_mse_m2, config.max_overlap_mse_m2);
+  if (loop_closure && r.path == RegistrationPath::kDirect) return {kLoopWithoutFeatures, r.why};
+  if (q.overlap_points == 0) return {kNoOverlap, ""};
+  if (!q.converged) return {kNotConverged, ""};
+  if (r.inlier_ratio < config.min_inlier_ratio) return {kInlierRatio, format("%.2f < %.2f", r.inlier_ratio, config.min_inlier_ratio)};
+  if (q.overlap_mse_m2 > config.max_overlap_mse_m2) {
+    return {kOverlapMse, format("%.2f m2 > %.2f m2", q.overlap_mse_m2, config.max_overlap_mse_m2)};
+  }
   if (static_cast<int>(q.overlap_points) < config.min_overlap_points) {
-    return format("overlap points %.0f < %.0f", static_cast<double>(q.overlap_points), config.min_overlap_points);
+    return {kOverlapPoints, format("%.0f < %.0f", static_cast<double>(q.overlap_points), config.min_overlap_points)};
   }
   if (config.max_competitor_ratio > 0 && r.path == RegistrationPath::kFeatureAided && r.ransac_inliers > 0) {
     const double ratio = static_cast<double>(r.competitor_inliers) / r.ransac_inliers;
     if (ratio >= config.max_competitor_ratio) {
-      return format("ambiguous (a second alignment %.1f m away has %.0f of the winner's %.0f inliers)", r.competitor_separation_m,
-                    static_cast<double>(r.competitor_inliers), static_cast<double>(r.ransac_inliers));
+      return {kCompetitor, format("a second alignment %.1f m away has %.0f of the winner's %.0f inliers", r.competitor_separation_m,
+                                  static_cast<double>(r.competitor_inliers), static_cast<double>(r.ransac_inliers))};
     }
   }
   if (config.min_distinctness > 0 && r.path == RegistrationPath::kFeatureAided) {
     const Uniqueness& u = r.uniqueness;
-    if (!u.probed) return "ambiguous (too little terrain overlap to probe its uniqueness)";
+    if (!u.probed) return {kNotUnique, "too little terrain overlap to probe its uniqueness"};
     if (u.distinctness() < config.min_distinctness) {
-      return format("ambiguous (the terrain also fits %.1f m away: distinctness %.1f < %.1f)", u.alternative_offset_m.norm(),
-                    u.distinctness(), config.min_distinctness);
+      return {kNotUnique, format("the terrain also fits %.1f m away: distinctness %.1f < %.1f", u.alternative_offset_m.norm(),
+                                 u.distinctness(), config.min_distinctness)};
     }
   }
   const double moved = (r.registration.source_to_target.translation() - guess.translation()).norm();
-  if (moved > config.max_translation_m) return format("translation from dead reckoning %.1f m > %.1f m", moved, config.max_translation_m);
+  if (moved > config.max_translation_m) return {kTranslation, format("%.1f m > %.1f m", moved, config.max_translation_m)};
   return {};
 }
 

@@ -5,8 +5,10 @@
 
 #include <Eigen/Geometry>
 
+#include "core/accept/rejection.h"
 #include "core/graph/pose_graph.h"
 #include "core/register/coarse_to_fine.h"
+#include "core/types/fields.h"
 
 namespace bathyslam {
 
@@ -21,46 +23,67 @@ struct AcceptanceConfig {  // Table 1 (b)
   double max_competitor_ratio = 0.5;
   // Uniqueness (feature-aided path, register/uniqueness.h): refused unless every other
   // horizontal offset of the terrain within reach fits at least this many times worse (in mean
-  // squared misfit) than the answer, i.e. with an RMS misfit 5x the answer's. Measured on `lake`
-  // paper seed 1 (mounds): correct answers 56-600; on sand waves, answers a wavelength off
-  // 0.2-10 (README, "Robustness"). 0 turns the test off.
+  // squared misfit) than the answer, i.e. with an RMS misfit 5x the answer's: correct answers
+  // and aliases a wavelength off fall far apart on either side of it (README, "Robustness").
+  // 0 turns the test off.
   double min_distinctness = 25.0;
+
+  template <typename Field>
+  void fields(Field&& field) {
+    field("min_inlier_ratio", min_inlier_ratio, 0, 1);
+    field("max_overlap_mse_m2", max_overlap_mse_m2, 0, 1000);
+    field("min_overlap_points", min_overlap_points, 0, 10000000);
+    field("max_translation_m", max_translation_m, 0, 100000);
+    field("max_competitor_ratio", max_competitor_ratio, 0, 1);
+    field("min_distinctness", min_distinctness, 0, 1e6);
+  }
 };
 
-// Empty when accepted; otherwise the first failed test in words. A loop closure spans the
-// drift of a line or more, wider than GICP's basin from dead reckoning: only the feature-aided
-// path may close one (section 3.4, coarse to fine).
-std::string rejection_reason(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
-                             bool loop_closure);
+// kNone when accepted; otherwise the first failed test. A loop closure spans the drift of a line
+// or more, wider than GICP's basin from dead reckoning: only the feature-aided path may close
+// one (section 3.4, coarse to fine).
+Rejection rejection_of(const PairRegistration& r, const Eigen::Isometry3d& guess, const AcceptanceConfig& config,
+                       bool loop_closure);
 
 struct QualityConfig {
   // Information of a perfect registration, compared at the overlap (the edge's anchor).
   Eigen::Vector3d best_sigma_translation_m{0.1, 0.1, 0.05};
   // Yaw: a registration that places an overlap some 20 m across to 0.1 m knows its turn to about
-  // 0.1 m over a 10 m lever, 0.01 rad. The earlier 0.004 rad made feature-aided edges 3-4 sigma
-  // off in yaw (0.8-0.9 deg errors) on `small` (README, "Robustness").
+  // 0.1 m over a 10 m lever, 0.01 rad; tighter made correct edges sit sigmas off in yaw
+  // (README, "Robustness").
   Eigen::Vector3d best_sigma_rotation_rad{0.002, 0.002, 0.01};
   // Share of that information in x, y and yaw that a direct-path edge keeps. The switch sends
   // a pair down the direct path when its overlap has too few features to match, and there
-  // GICP's horizontal answer is its starting guess: measured on `lake`, such edges carry the
-  // guess's error (metres to tens of metres) with a good residual. They constrain depth,
+  // GICP's horizontal answer is its starting guess: such edges carry the guess's error (metres
+  // to tens of metres, README "Results") with a good residual. They constrain depth,
   // roll and pitch; the horizontal comes from dead reckoning and feature-aided edges.
   double direct_horizontal_share = 0.0;
   // Nor does the direct path know where along the bottom its depth was measured: on sloping,
   // rippled or rough ground a depth taken a few metres off is a different depth. Its depth
   // information is capped at what the relief around the answer allows (the uniqueness probe's
   // local cost, as a variance); on a flat bottom that is no cap at all. 0 turns the cap off.
-  int direct_depth_from_relief = 1;
+  bool direct_depth_from_relief = true;
   // 1: the information's shape comes from what the registration observed, the GICP cost's
   // Hessian (observed_information), instead of the diagonal above; direct_horizontal_share
   // then no longer applies, the Hessian telling flat overlaps from textured ones itself. Needs
   // the registration's Hessian (CoarseToFineConfig::hessian).
-  int information_from_hessian = 0;
+  bool information_from_hessian = false;
   // observed_information's shares: a direction with at least `hessian_full_share` of the
   // best-observed one's (whitened) curvature is fully observed, one with less than
   // `hessian_zero_share` not at all (sounding noise on a flat bottom reaches ~0.01).
   double hessian_full_share = 0.03;
   double hessian_zero_share = 0.012;
+
+  template <typename Field>
+  void fields(Field&& field) {
+    xyz("best_sigma_translation_m", best_sigma_translation_m, 1e-4, 1e3, field);
+    rpy("best_sigma_rotation_rad", best_sigma_rotation_rad, 1e-6, 10, field);
+    field("direct_horizontal_share", direct_horizontal_share, 0, 1);
+    field("direct_depth_from_relief", direct_depth_from_relief, 0, 1);
+    field("information_from_hessian", information_from_hessian, 0, 1);
+    field("hessian_full_share", hessian_full_share, 1e-6, 1);
+    field("hessian_zero_share", hessian_zero_share, 0, 1);
+  }
 };
 
 // Each factor in (0, 1], piecewise linear between the knots given in the README ("MCHS").

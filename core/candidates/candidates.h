@@ -29,6 +29,13 @@ struct CandidateConfig {
   double min_overlap_fraction = 0.1;
   // Loop candidates: submaps this many apart in time or more (nearer ones are odometry's).
   int loop_min_submap_gap = 5;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("k_adjacent_lines", k_adjacent_lines, 1, 100);
+    field("parallel_tolerance_deg", parallel_tolerance_deg, 0, 90);
+    field("min_overlap_fraction", min_overlap_fraction, 0, 1);
+    field("loop_min_submap_gap", loop_min_submap_gap, 1, 100000);
+  }
 };
 
 // Whether submaps `a` and `b` lie on distinct survey lines at most K apart that run parallel or

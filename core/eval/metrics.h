@@ -1,5 +1,5 @@
 #pragma once
-// eval: the quality report's numbers (design.md, "Evaluation").
+// eval: the quality report's numbers (docs/design.md, "Evaluation").
 #include <optional>
 #include <vector>
 
@@ -25,6 +25,13 @@ struct ConsistencyConfig {
   int min_soundings = 3;  // per line and cell
   double histogram_bin_m = 0.02;
   int histogram_bins = 100;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("cell_m", cell_m, 0.05, 100);
+    field("min_soundings", min_soundings, 1, 1000);
+    field("histogram_bin_m", histogram_bin_m, 0.001, 10);
+    field("histogram_bins", histogram_bins, 1, 100000);
+  }
 };
 
 struct ConsistencyReport {

@@ -12,6 +12,12 @@ struct GridConfig {
   double cell_m = 0.5;            // grid resolution: 11 cells span 5.5 m, a patch that fits an overlap
   double idw_radius_cells = 1.0;  // soundings within this many cells of a cell centre contribute
   double idw_power = 2.0;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("cell_m", cell_m, 0.05, 20);
+    field("idw_radius_cells", idw_radius_cells, 0.5, 10);
+    field("idw_power", idw_power, 0, 10);
+  }
 };
 
 struct TerrainGrid {

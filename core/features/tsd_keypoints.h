@@ -1,6 +1,7 @@
 #pragma once
 // features (Algorithm 1): terrain standard deviation (TSD) keypoints of a gridded submap and
 // their rotation-normalised elevation descriptors.
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -11,7 +12,7 @@
 namespace bathyslam {
 
 struct KeypointConfig {  // Table 1 (b)
-  std::vector<int> window_scales{3, 7, 9};  // TSD windows, cells
+  std::array<int, 3> window_scales{3, 7, 9};  // TSD windows, cells
   double percentile = 70;                   // keypoints pass this percentile at every scale
   int descriptor_size = 11;                 // d x d elevation samples
   // A departure from the paper: a per-submap percentile alone selects 30 % of the cells, flat
@@ -20,6 +21,17 @@ struct KeypointConfig {  // Table 1 (b)
   double min_tsd_m = 0.08;     // at the finest scale
   int suppression_radius = 0;  // cells; 0 (the paper): every cell that passes is a keypoint
   int orientation_bins = 36;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("window_scales.fine", window_scales[0], 3, 63);
+    field("window_scales.middle", window_scales[1], 3, 63);
+    field("window_scales.coarse", window_scales[2], 3, 63);
+    field("percentile", percentile, 0, 100);
+    field("descriptor_size", descriptor_size, 3, 63);
+    field("min_tsd_m", min_tsd_m, 0, 100);
+    field("suppression_radius", suppression_radius, 0, 50);
+    field("orientation_bins", orientation_bins, 4, 360);
+  }
 };
 
 struct Keypoint {

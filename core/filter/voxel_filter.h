@@ -15,6 +15,12 @@ struct VoxelConfig {
   float leaf_x_m = 0.2f;
   float leaf_y_m = 0.2f;
   float leaf_z_m = 0.1f;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("leaf_x_m", leaf_x_m, 0.01, 10);
+    field("leaf_y_m", leaf_y_m, 0.01, 10);
+    field("leaf_z_m", leaf_z_m, 0.01, 10);
+  }
 };
 
 // Points must be centred (submap frame): PCL works in float.

@@ -1,5 +1,5 @@
 #pragma once
-// fuse (design.md pipeline): every sounding placed by its submap's pose onto the CRS-anchored
+// fuse (docs/design.md pipeline): every sounding placed by its submap's pose onto the CRS-anchored
 // grid; per cell the mean elevation, the standard deviation and the count.
 #include <cstdint>
 #include <memory>

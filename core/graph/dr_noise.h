@@ -84,6 +84,10 @@ struct PlausibilityConfig {
   // keeps depth, roll and pitch well and the sonar measures depth, so a registration that
   // corrects them is not suspect.
   double chi2_threshold = 16.27;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("chi2_threshold", chi2_threshold, 0.01, 1e6);
+  }
 };
 
 struct PlausibilityTest {

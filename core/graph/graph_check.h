@@ -35,6 +35,10 @@ struct GraphCheckConfig {
   // than DR's noise (the solve fits them), so correct lines sit far below the quantile and a
   // wrong loop's bend stands out even at this level.
   double p = 0.999;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("p", p, 0.5, 0.999999);
+  }
 };
 
 struct LineCheck {

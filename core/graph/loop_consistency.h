@@ -9,6 +9,7 @@
 
 #include "core/graph/dr_noise.h"
 #include "core/graph/pose_graph.h"
+#include "core/types/fields.h"
 
 namespace bathyslam {
 
@@ -58,6 +59,13 @@ struct LoopConsistencyConfig {
   // greedy above; both also bounded by a branch budget.
   int max_exact_loops = 300;
   long max_branch_steps = 2'000'000;
+  template <typename Field>
+  void fields(Field&& field) {
+    nested("plausibility", plausibility, field);
+    field("pair_chi2_threshold", pair_chi2_threshold, 0.01, 1e6);
+    field("max_exact_loops", max_exact_loops, 0, 100000);
+    field("max_branch_steps", max_branch_steps, 0, 1e12);
+  }
 };
 
 enum class LoopVerdict {

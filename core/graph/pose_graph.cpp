@@ -113,7 +113,7 @@ GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
     solution.converged = true;
     return solution;
   }
-  // The first pose anchors the map: it is shared with the reference (design.md, evaluation).
+  // The first pose anchors the map: it is shared with the reference (docs/design.md, evaluation).
   problem.SetParameterBlockConstant(positions[0].data());
   problem.SetParameterBlockConstant(rotations[0].coeffs().data());
 

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include "core/types/fields.h"
 
 namespace bathyslam {
 
@@ -60,6 +61,15 @@ struct GraphConfig {
   // Φ = 1 would already scale the typical correct edge (χ² ≈ 6) to a twelfth of its weight.
   double dcs_phi = 12.59;
   int max_iterations = 200;
+  template <typename Field>
+  void fields(Field&& field) {
+    xyz("dr_sigma_translation_m", dr_sigma_translation_m, 1e-4, 1e3, field);
+    rpy("dr_sigma_rotation_rad", dr_sigma_rotation_rad, 1e-8, 10, field);
+    field("robust_kernel", robust_kernel, 0, 1);  // 0 huber, 1 dcs
+    field("huber_delta", huber_delta, 1e-3, 1e3);
+    field("dcs_phi", dcs_phi, 1e-3, 1e6);
+    field("max_iterations", max_iterations, 1, 10000);
+  }
 };
 
 struct GraphSolution {

@@ -1,5 +1,5 @@
 #pragma once
-// The survey bundle (design.md, "Survey bundle"): a folder, or a .tar of one, with survey.json,
+// The survey bundle (docs/design.md, "Survey bundle"): a folder, or a .tar of one, with survey.json,
 // nav.csv, pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
 // only when there is no error; every problem names its file, line and field.
 #include <filesystem>

@@ -1,5 +1,5 @@
 #pragma once
-// Where a survey bundle's files live: a folder, or a .tar of one (design.md, "Survey bundle"),
+// Where a survey bundle's files live: a folder, or a .tar of one (docs/design.md, "Survey bundle"),
 // read in place through GDAL's /vsitar/ file system, nothing extracted.
 #include <cstdint>
 #include <filesystem>

@@ -23,6 +23,19 @@ struct RansacConfig {  // Table 1 (b)
   // winner does is a distinct solution, and its support is reported (acceptance judges it).
   bool find_competitor = true;
   double competitor_separation_m = 3.0;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("max_iterations", max_iterations, 1, 1000000);
+    field("initial_threshold_m", initial_threshold_m, 0.01, 100);
+    field("sample_size", sample_size, 3, 100);
+    field("target_inlier_ratio", target_inlier_ratio, 0.01, 1);
+    field("min_inliers", min_inliers, 3, 100000);
+    field("mad_scale", mad_scale, 0.1, 100);
+    field("min_threshold_m", min_threshold_m, 0.001, 100);
+    field("seed", seed, 0, 9007199254740992.0);  // 2^53: every integer a double holds
+    field("find_competitor", find_competitor, 0, 1);
+    field("competitor_separation_m", competitor_separation_m, 0.01, 1000);
+  }
 };
 
 struct RansacResult {

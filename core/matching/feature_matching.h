@@ -15,6 +15,13 @@ struct MatchConfig {  // Table 1 (b)
   double min_ncc = 0.85;
   double ratio = 0.8;            // best MSE below this fraction of the second best
   int min_matches = 30;          // fewer: the pair falls back to direct registration
+  template <typename Field>
+  void fields(Field&& field) {
+    field("max_distance_m", max_distance_m, 0.1, 1000);
+    field("min_ncc", min_ncc, -1, 1);
+    field("ratio", ratio, 0.01, 1);
+    field("min_matches", min_matches, 3, 100000);
+  }
 };
 
 struct FeatureMatch {

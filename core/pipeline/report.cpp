@@ -13,40 +13,58 @@ nlohmann::json stats_json(const ErrorStats& s) {
           {"p99", s.p99},   {"max", s.max},   {"count", s.count}};
 }
 
-// A reason without its numbers and details ("inlier ratio 0.21 < 0.25" -> "inlier ratio"), for
-// counting.
+// The switch's decision without its numbers ("too few features (density 0.002 < 0.005)" ->
+// "too few features"), for counting.
 std::string kind_of(const std::string& reason) {
   std::string kind = reason.substr(0, reason.find_first_of("0123456789("));
   while (!kind.empty() && kind.back() == ' ') kind.pop_back();
   return kind;
 }
 
-// Candidates, accepted and rejected (with reasons) per constraint type and per registration path.
-nlohmann::json constraint_stats(const PipelineResult& r) {
-  nlohmann::json by_type = nlohmann::json::object();
-  auto count = [](nlohmann::json& t, const Constraint& c) {
-    if (t.is_null()) t = {{"candidates", 0}, {"accepted", 0}, {"rejected", 0}, {"rejection_reasons", nlohmann::json::object()}};
-    t["candidates"] = t["candidates"].get<int>() + 1;
-    if (c.in_graph()) {
-      t["accepted"] = t["accepted"].get<int>() + 1;
-    } else {
-      t["rejected"] = t["rejected"].get<int>() + 1;
-      nlohmann::json& reasons = t["rejection_reasons"];
-      const std::string kind = kind_of(c.accepted ? c.excluded : c.reason);
-      reasons[kind] = reasons.value(kind, 0) + 1;
-    }
-  };
-  nlohmann::json by_path = nlohmann::json::object(), switch_decisions = nlohmann::json::object();
-  for (const Constraint& c : r.constraints) {
-    count(by_type[to_string(c.type)], c);
-    if (!c.path.empty()) count(by_path[c.path], c);
-    if (!c.path_reason.empty()) {
-      nlohmann::json& d = switch_decisions[c.path];
-      if (d.is_null()) d = nlohmann::json::object();
-      d[kind_of(c.path_reason)] = d.value(kind_of(c.path_reason), 0) + 1;
-    }
+nlohmann::json counts_json(const std::map<std::string, ConstraintCounts>& groups) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [name, c] : groups) {
+    out[name] = {{"candidates", c.candidates}, {"accepted", c.accepted}, {"rejected", c.rejected},
+                 {"rejection_reasons", c.rejections}};
   }
-  return {{"by_type", by_type}, {"by_path", by_path}, {"switch_decisions", switch_decisions}};
+  return out;
+}
+
+// How the switch decided, by path: its reasons without their numbers.
+nlohmann::json switch_decisions(const PipelineResult& r) {
+  nlohmann::json decisions = nlohmann::json::object();
+  for (const Constraint& c : r.constraints) {
+    if (!c.path || c.path_reason.empty()) continue;
+    nlohmann::json& d = decisions[to_string(*c.path)];
+    if (d.is_null()) d = nlohmann::json::object();
+    d[kind_of(c.path_reason)] = d.value(kind_of(c.path_reason), 0) + 1;
+  }
+  return decisions;
+}
+
+ErrorStats stats_from_json(const nlohmann::json& j) {
+  ErrorStats s;
+  s.rmse = j.at("rmse").get<double>();
+  s.mean = j.at("mean").get<double>();
+  s.std = j.at("std").get<double>();
+  s.p50 = j.at("p50").get<double>();
+  s.p95 = j.at("p95").get<double>();
+  s.p99 = j.at("p99").get<double>();
+  s.max = j.at("max").get<double>();
+  s.count = j.at("count").get<std::size_t>();
+  return s;
+}
+
+std::map<std::string, ConstraintCounts> counts_from_json(const nlohmann::json& j) {
+  std::map<std::string, ConstraintCounts> groups;
+  for (const auto& [name, c] : j.items()) {
+    ConstraintCounts& out = groups[name];
+    out.candidates = c.at("candidates").get<std::int64_t>();
+    out.accepted = c.at("accepted").get<std::int64_t>();
+    out.rejected = c.at("rejected").get<std::int64_t>();
+    out.rejections = c.at("rejection_reasons").get<std::map<std::string, std::int64_t>>();
+  }
+  return groups;
 }
 
 // Every registration with its quality, and its error against the reference where there is one.
@@ -62,20 +80,21 @@ nlohmann::json registrations_json(const PipelineResult& r) {
                         {"fitness", c.quality.fitness},
                         {"overlap_points", c.quality.overlap_points},
                         {"overlap_mse_m2", c.quality.overlap_mse_m2},
-                        {"path", c.path},
+                        {"path", c.path ? to_string(*c.path) : ""},
                         {"path_reason", c.path_reason},
                         {"feature_density", c.feature_density},
                         {"matches", c.matches},
                         {"inlier_ratio", c.inlier_ratio},
                         // In the graph: passed every registration test and kept by the back end.
                         {"accepted", c.in_graph()},
-                        {"reason", c.accepted ? c.excluded : c.reason}};
+                        {"rejection", to_string(c.why_not().kind)},
+                        {"reason", c.why_not().text()}};
     nlohmann::json gates = nlohmann::json::object();
     if (c.dr_mahalanobis2 >= 0) {
       gates["dr_mahalanobis2"] = c.dr_mahalanobis2;
-      gates["dr_threshold"] = r.config.robustness.consistency_config.plausibility.chi2_threshold;
+      gates["dr_threshold"] = r.config.robustness.pcm.plausibility.chi2_threshold;
     }
-    if (c.path == "feature-aided") {
+    if (c.path == RegistrationPath::kFeatureAided) {
       gates["competitor_inliers"] = c.competitor_inliers;
       gates["competitor_separation_m"] = c.competitor_separation_m;
     }
@@ -129,34 +148,80 @@ nlohmann::json safety_net_json(const SafetyNet& net) {
 
 }  // namespace
 
+ReportSummary report_summary(const PipelineResult& r) {
+  ReportSummary s;
+  s.configuration = to_string(r.config.configuration);
+  s.trajectory = error_stats(r.trajectory_errors);
+  s.trajectory_dr = error_stats(r.dr_trajectory_errors);
+  s.consistency = r.consistency.stats;
+  s.consistency_dr = r.dr_consistency.stats;
+  s.histogram = r.consistency.histogram;
+  auto count = [](ConstraintCounts& t, const Constraint& c) {
+    ++t.candidates;
+    if (c.in_graph()) {
+      ++t.accepted;
+    } else {
+      ++t.rejected;
+      ++t.rejections[to_string(c.why_not().kind)];
+    }
+  };
+  for (const Constraint& c : r.constraints) {
+    count(s.by_type[to_string(c.type)], c);
+    if (c.path) count(s.by_path[to_string(*c.path)], c);
+  }
+  return s;
+}
+
+ReportSummary report_summary_from_json(const nlohmann::json& j) {
+  try {
+    ReportSummary s;
+    s.configuration = j.at("configuration").get<std::string>();
+    const nlohmann::json& trajectory = j.at("trajectory_error_m");
+    s.trajectory = stats_from_json(trajectory.at("optimized"));
+    s.trajectory_dr = stats_from_json(trajectory.at("dead_reckoning"));
+    const nlohmann::json& consistency = j.at("consistency_error_m");
+    s.consistency = stats_from_json(consistency.at("optimized"));
+    s.consistency_dr = stats_from_json(consistency.at("dead_reckoning"));
+    s.histogram.bin_width = consistency.at("histogram").at("bin_width_m").get<double>();
+    s.histogram.counts = consistency.at("histogram").at("counts").get<std::vector<std::size_t>>();
+    s.by_type = counts_from_json(j.at("constraints").at("by_type"));
+    s.by_path = counts_from_json(j.at("constraints").at("by_path"));
+    return s;
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(std::string("report.json: ") + e.what());
+  }
+}
+
 nlohmann::json report_json(const PipelineResult& r) {
-  nlohmann::json histogram = {{"bin_width_m", r.consistency.histogram.bin_width},
-                              {"counts", r.consistency.histogram.counts},
+  const ReportSummary s = report_summary(r);
+  nlohmann::json histogram = {{"bin_width_m", s.histogram.bin_width},
+                              {"counts", s.histogram.counts},
                               {"dr_counts", r.dr_consistency.histogram.counts}};
   nlohmann::json timings = nlohmann::json::object();
   for (const StageTiming& t : r.timings) timings[t.stage] = t.seconds;
-  return {{"configuration", to_string(r.config.configuration)},
+  return {{"configuration", s.configuration},
           {"safety_net", safety_net_json(r.safety_net)},
           {"parameters", parameters(r.config)},
           {"submaps", {{"count", r.submaps.submaps.size()},
                        {"lines", r.submaps.lines.size()},
                        {"pings_dropped_outside_navigation", r.submaps.pings_dropped}}},
-          {"constraints", constraint_stats(r)},
+          {"constraints", {{"by_type", counts_json(s.by_type)}, {"by_path", counts_json(s.by_path)},
+                           {"switch_decisions", switch_decisions(r)}}},
           {"registrations", registrations_json(r)},
           {"graph", {{"converged", r.graph.converged}, {"iterations", r.graph.iterations},
                      {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost}}},
-          {"trajectory_error_m", {{"optimized", stats_json(error_stats(r.trajectory_errors))},
-                                  {"dead_reckoning", stats_json(error_stats(r.dr_trajectory_errors))},
+          {"trajectory_error_m", {{"optimized", stats_json(s.trajectory)},
+                                  {"dead_reckoning", stats_json(s.trajectory_dr)},
                                   {"aligned", {{"optimized", stats_json(error_stats(r.aligned_trajectory_errors))},
                                                {"dead_reckoning", stats_json(error_stats(r.dr_aligned_trajectory_errors))}}},
                                   {"per_pose", r.trajectory_errors}}},
-          {"consistency_error_m", {{"optimized", stats_json(r.consistency.stats)},
-                                   {"dead_reckoning", stats_json(r.dr_consistency.stats)},
+          {"consistency_error_m", {{"optimized", stats_json(s.consistency)},
+                                   {"dead_reckoning", stats_json(s.consistency_dr)},
                                    {"histogram", histogram}}},
           {"timings_s", timings}};
 }
 
-std::string report_summary(const PipelineResult& r) {
+std::string report_text(const PipelineResult& r) {
   const ErrorStats t = error_stats(r.trajectory_errors), t0 = error_stats(r.dr_trajectory_errors);
   const ErrorStats ta = error_stats(r.aligned_trajectory_errors), ta0 = error_stats(r.dr_aligned_trajectory_errors);
   const ErrorStats& c = r.consistency.stats;

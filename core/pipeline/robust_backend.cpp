@@ -32,29 +32,26 @@ void publish_dead_reckoning(PipelineResult& r) {
   r.graph.poses = r.dr_poses;
   r.optimized_poses = r.dr_poses;
   for (Constraint& c : r.constraints) {
-    if (c.type != ConstraintType::kOdometry && c.in_graph()) c.excluded = "safety net: dead reckoning published instead";
+    if (c.type != ConstraintType::kOdometry && c.in_graph()) c.exclusion = {RejectionKind::kSafetyNet, "dead reckoning published instead"};
   }
 }
 
-constexpr const char* kInconsistent = "inconsistent with the other registrations";
-
 std::string describe(const Constraint& c) {
-  return to_string(c.type) + " " + std::to_string(c.from) + "->" + std::to_string(c.to) + " (" + c.path + ")";
+  return to_string(c.type) + " " + std::to_string(c.from) + "->" + std::to_string(c.to) + " (" + (c.path ? to_string(*c.path) : "odometry") + ")";
 }
 
 }  // namespace
 
 void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                  const PlausibilityConfig& config) {
-  if (!c.accepted) return;
+  if (!c.accepted()) return;
   const LoopCandidate measured = loop_candidate(edge_of(c), dr_poses);
   const PlausibilityTest test = plausibility(measured.measured, dr.relative_pose(c.from, c.to),
                                              dr.covariance(c.from, c.to) + measured.covariance, config.chi2_threshold);
   c.dr_mahalanobis2 = test.mahalanobis2;
   if (test.plausible) return;
-  c.accepted = false;
-  c.reason = format("implausible against dead reckoning (Mahalanobis2 %.1f > %.1f over %.0f submaps)", test.mahalanobis2,
-                    config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)));
+  c.rejection = {RejectionKind::kImplausible, format("Mahalanobis2 %.1f > %.1f over %.0f submaps", test.mahalanobis2,
+                                                      config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)))};
 }
 
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
@@ -64,7 +61,7 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
   for (std::size_t k = 0; k < constraints.size(); ++k) {
     Constraint& c = constraints[k];
     if (c.type == ConstraintType::kOdometry) continue;
-    if (c.excluded.starts_with(kInconsistent)) c.excluded.clear();
+    if (c.exclusion.kind == RejectionKind::kInconsistent) c.exclusion = {};
     if (!c.in_graph() || !carries_horizontal_information(c.information)) continue;
     owner.push_back(k);
     candidates.push_back(loop_candidate(edge_of(c), dr_poses));
@@ -72,9 +69,9 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
   const LoopSelection selection = select_consistent_loops(candidates, dr, config);
   for (std::size_t i = 0; i < owner.size(); ++i) {
     if (selection.verdicts[i] == LoopVerdict::kept) continue;
-    constraints[owner[i]].excluded = std::string(kInconsistent) +
-                                     (selection.verdicts[i] == LoopVerdict::implausible ? " (implausible against dead reckoning)"
-                                                                                        : " (not in the largest consistent set)");
+    constraints[owner[i]].exclusion = {RejectionKind::kInconsistent, selection.verdicts[i] == LoopVerdict::implausible
+                                                                         ? "implausible against dead reckoning"
+                                                                         : "not in the largest consistent set"};
   }
 }
 
@@ -103,7 +100,7 @@ void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
       owner.push_back(k);
     }
     r.graph = optimize_pose_graph(r.dr_poses, edges, config.graph);
-    net.check = check_graph(r.graph.poses, edges, line_of_node, robustness.check);
+    net.check = check_graph(r.graph.poses, edges, line_of_node, robustness.line_check);
     int hardest = -1;
     double hardest_sigma = 0;
     for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -129,9 +126,9 @@ void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
       return;
     }
     Constraint& worst = r.constraints[owner[hardest]];
-    worst.excluded = format("safety net: pulled %.1f sigma against the solution", hardest_sigma) +
-                     (net.check.pass ? "" : ", lines bent beyond their noise");
-    net.dropped.push_back(describe(worst) + ": " + worst.excluded);
+    worst.exclusion = {RejectionKind::kSafetyNet, format("pulled %.1f sigma against the solution", hardest_sigma) +
+                                                      (net.check.pass ? "" : ", lines bent beyond their noise")};
+    net.dropped.push_back(describe(worst) + ": " + worst.exclusion.text());
   }
 }
 

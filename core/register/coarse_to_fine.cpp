@@ -1,5 +1,7 @@
 #include "core/register/coarse_to_fine.h"
 
+#include <stdexcept>
+
 #include "core/types/format.h"
 
 namespace bathyslam {
@@ -16,6 +18,13 @@ double feature_density(const SubmapFeatures& a, const SubmapFeatures& b) {
 
 std::string to_string(RegistrationPath path) {
   return path == RegistrationPath::kDirect ? "direct" : "feature-aided";
+}
+
+RegistrationPath parse_registration_path(const std::string& text) {
+  for (RegistrationPath p : {RegistrationPath::kDirect, RegistrationPath::kFeatureAided}) {
+    if (text == to_string(p)) return p;
+  }
+  throw std::invalid_argument("registration path '" + text + "' is not known to this version of the core");
 }
 
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
@@ -37,10 +46,10 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
 
 PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed) {
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian) {
   const double density = feature_density(target_features, source_features);
   auto direct = [&](std::string why) {
-    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m, config.hessian != 0);
+    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m, with_hessian);
     r.path = RegistrationPath::kDirect;
     r.why = std::move(why);
     r.feature_density = density;
@@ -74,7 +83,7 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
     refine.refine_correspondence_m = config.feature_refine_correspondence_m;
   }
   PairRegistration r =
-      register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m, config.hessian != 0);
+      register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m, with_hessian);
   r.path = RegistrationPath::kFeatureAided;
   r.why = format("feature density %.4f >= %.4f", density, config.switching.min_feature_density) + ", " +
           std::to_string(matches.size()) + " matches";

@@ -12,6 +12,7 @@
 #include "core/register/uniqueness.h"
 #include "core/register/registration_information.h"
 #include "core/submaps/submap.h"
+#include "core/types/fields.h"
 
 namespace bathyslam {
 
@@ -25,6 +26,10 @@ SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, co
 
 struct SwitchConfig {
   double min_feature_density = 0.005;  // Table 1 (a): keypoints per valid cell of the pair
+  template <typename Field>
+  void fields(Field&& field) {
+    field("min_feature_density", min_feature_density, 0, 1);
+  }
 };
 
 // Keypoints over valid cells of the two submaps together.
@@ -32,6 +37,7 @@ double feature_density(const SubmapFeatures& a, const SubmapFeatures& b);
 
 enum class RegistrationPath { kDirect, kFeatureAided };
 std::string to_string(RegistrationPath path);
+RegistrationPath parse_registration_path(const std::string& text);  // throws std::invalid_argument
 
 struct CoarseToFineConfig {
   SwitchConfig switching;
@@ -47,10 +53,16 @@ struct CoarseToFineConfig {
   // a few centimetres and a tenth of a degree instead of Table 1's ~0.2 m and ~0.8 deg
   // (gicp_test.cpp). 0: refine exactly as the direct path registers.
   double feature_refine_correspondence_m = 1.0;
-  // 1: also take the GICP cost's Hessian at the result (PairRegistration::hessian), for
-  // quality.information_from_hessian. It costs about as much again as the registration (one
-  // more pass of KD-trees and covariances), so it is off unless the information needs it.
-  int hessian = 0;
+  template <typename Field>
+  void fields(Field&& field) {
+    nested("switching", switching, field);
+    nested("matching", matching, field);
+    nested("ransac", ransac, field);
+    nested("gicp", gicp, field);
+    field("crop_margin_m", crop_margin_m, 0, 100);
+    nested("uniqueness", uniqueness, field);
+    field("feature_refine_correspondence_m", feature_refine_correspondence_m, 0, 100);
+  }
 };
 
 struct PairRegistration {
@@ -75,9 +87,12 @@ struct PairRegistration {
 };
 
 // `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC reproducible per pair.
+// `with_hessian`: also the GICP cost's Hessian at the result (PairRegistration::hessian), for
+// quality.information_from_hessian; it costs about as much again as the registration (one more
+// pass of KD-trees and covariances), so only the information that needs it asks.
 PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed);
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false);
 
 // Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid and, if
 // `with_hessian`, the cost's Hessian there.

@@ -22,9 +22,19 @@ struct GicpConfig {  // Table 1 (c)
   // a 2 m, 3 deg error this recovers textured pairs to a few centimetres, but from dead reckoning
   // on flat pairs it lets yaw slide where nothing constrains it, which costs the `gicp` baseline
   // (README, "Registration"); the feature-aided path starts it close instead.
-  int about_centroid = 0;                // 0 or 1
+  bool about_centroid = false;
   double refine_correspondence_m = 0.0;  // 0: no second pass
   double refine_convergence = 1e-6;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("max_correspondence_m", max_correspondence_m, 0.01, 100);
+    field("max_iterations", max_iterations, 1, 10000);
+    field("convergence", convergence, 1e-12, 1);
+    field("neighbours", neighbours, 3, 200);
+    field("about_centroid", about_centroid, 0, 1);
+    field("refine_correspondence_m", refine_correspondence_m, 0, 100);
+    field("refine_convergence", refine_convergence, 1e-12, 1);
+  }
 };
 
 struct RegistrationQuality {

@@ -24,6 +24,14 @@ struct UniquenessConfig {
   // direct path keeps its guess's horizontal error: p50 2-6 m on `lake`): the relief within this
   // radius is how wrong a depth measured at the wrong place can be.
   double local_radius_m = 5.0;
+  template <typename Field>
+  void fields(Field&& field) {
+    field("search_radius_m", search_radius_m, 1, 1000);
+    field("step_m", step_m, 0.1, 100);
+    field("exclusion_m", exclusion_m, 0, 1000);
+    field("min_overlap_share", min_overlap_share, 0.01, 1);
+    field("local_radius_m", local_radius_m, 0, 1000);
+  }
 };
 
 struct Uniqueness {

@@ -1,5 +1,5 @@
 #pragma once
-// Dead reckoning that drifts away from the true navigation (design.md, "Drift, two models").
+// Dead reckoning that drifts away from the true navigation (docs/design.md, "Drift, two models").
 #include <cstdint>
 #include <optional>
 #include <vector>

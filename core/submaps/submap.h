@@ -1,5 +1,5 @@
 #pragma once
-// Submaps (design.md pipeline: sync, georef, submaps): pings posed by the navigation interpolated
+// Submaps (docs/design.md pipeline: sync, georef, submaps): pings posed by the navigation interpolated
 // at their times, grouped N at a time; each submap's frame is the vehicle pose at its middle
 // ping, and its soundings are stored in that frame (centred, so floats keep millimetres).
 #include <optional>
@@ -15,6 +15,10 @@ namespace bathyslam {
 
 struct SubmapConfig {
   int pings_per_submap = 100;  // Table 1 (a)
+  template <typename Field>
+  void fields(Field&& field) {
+    field("pings_per_submap", pings_per_submap, 10, 10000);
+  }
 };
 
 struct Submap {

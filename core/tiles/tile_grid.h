@@ -1,5 +1,5 @@
 #pragma once
-// The fixed tile grid (design.md pipeline: tiles). Tiles are 512 × 512 cells on the CRS-anchored
+// The fixed tile grid (docs/design.md pipeline: tiles). Tiles are 512 × 512 cells on the CRS-anchored
 // lattice of core/fuse/grid.h: tile (level, col, row) holds global cells
 // [col·512, col·512 + 511] × [row·512, row·512 + 511] of level `level`, whose cells are 2^level
 // times the level-0 resolution. Rows count northward from the CRS origin (as in TMS), so a tile's

@@ -1,5 +1,5 @@
 #pragma once
-// Navigation samples as rigid poses in the map frame (east, north, up; design.md).
+// Navigation samples as rigid poses in the map frame (east, north, up; docs/design.md).
 #include <Eigen/Geometry>
 
 #include "core/types/survey.h"

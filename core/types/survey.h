@@ -1,7 +1,7 @@
 #pragma once
 // The survey as it comes off the vehicle: navigation, pings and their beams.
 //
-// Frames and units (design.md, "Conventions"):
+// Frames and units (docs/design.md, "Conventions"):
 //  - navigation: projected CRS easting/northing in metres, depth in metres positive down,
 //    roll/pitch/heading in degrees, heading clockwise from north;
 //  - beams: the sonar's ray-traced solution in the vehicle frame (x forward, y starboard,

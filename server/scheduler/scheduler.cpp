@@ -69,8 +69,7 @@ class JobWatcher {
 
 // The job's stored parameters (every parameter, by name) applied to a fresh config.
 PipelineConfig job_config(const storage::ClaimedJob& job, int threads) {
-  PipelineConfig config;
-  config.configuration = parse_configuration(job.configuration);
+  PipelineConfig config = preset_config(parse_configuration(job.configuration));
   for (const auto& [name, value] : job.parameters.items()) set_parameter(config, name, value.get<double>());
   if (config.threads == 0) config.threads = threads;
   return config;

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "core/pipeline/pipeline.h"
+#include "core/pipeline/report.h"
 #include "server/log.h"
 
 namespace bathyslam::server {
@@ -47,36 +48,34 @@ void describe(const storage::JobRecord& job, v1::Job* reply) {
     if (value.is_number()) (*reply->mutable_parameters())[name] = value.get<double>();
 }
 
-void stats(const nlohmann::json& s, v1::ErrorStats* out) {
-  if (!s.is_object()) return;
-  out->set_rmse(s.value("rmse", 0.0));
-  out->set_mean(s.value("mean", 0.0));
-  out->set_std(s.value("std", 0.0));
-  out->set_p50(s.value("p50", 0.0));
-  out->set_p95(s.value("p95", 0.0));
-  out->set_p99(s.value("p99", 0.0));
-  out->set_max(s.value("max", 0.0));
-  out->set_count(s.value("count", std::int64_t{0}));
+void stats(const ErrorStats& s, v1::ErrorStats* out) {
+  out->set_rmse(s.rmse);
+  out->set_mean(s.mean);
+  out->set_std(s.std);
+  out->set_p50(s.p50);
+  out->set_p95(s.p95);
+  out->set_p99(s.p99);
+  out->set_max(s.max);
+  out->set_count(static_cast<std::int64_t>(s.count));
 }
 
-// {"adjacent": {"candidates": .., "accepted": .., "rejected": .., "rejection_reasons": {..}}, ..}
-void constraint_stats(const nlohmann::json& groups, google::protobuf::RepeatedPtrField<v1::ConstraintStats>* out) {
-  for (const auto& [name, c] : groups.items()) {
+void constraint_stats(const std::map<std::string, ConstraintCounts>& groups,
+                      google::protobuf::RepeatedPtrField<v1::ConstraintStats>* out) {
+  for (const auto& [name, c] : groups) {
     v1::ConstraintStats* stats = out->Add();
     stats->set_name(name);
-    stats->set_candidates(c.value("candidates", std::int64_t{0}));
-    stats->set_accepted(c.value("accepted", std::int64_t{0}));
-    stats->set_rejected(c.value("rejected", std::int64_t{0}));
-    const nlohmann::json reasons = c.value("rejection_reasons", nlohmann::json::object());  // named: items() refers to it
-    for (const auto& [reason, n] : reasons.items()) (*stats->mutable_rejection_reasons())[reason] = n.get<std::int64_t>();
+    stats->set_candidates(c.candidates);
+    stats->set_accepted(c.accepted);
+    stats->set_rejected(c.rejected);
+    for (const auto& [kind, n] : c.rejections) (*stats->mutable_rejection_reasons())[kind] = n;
   }
 }
 
-// The effective configuration: defaults, then the overrides, each checked by name and range.
+// The effective configuration: the configuration's preset, then the overrides, each checked by name and range.
 PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
   PipelineConfig config;
   try {
-    config.configuration = parse_configuration(request.configuration());
+    config = preset_config(parse_configuration(request.configuration()));
   } catch (const std::invalid_argument& error) {
     throw invalid("configuration", error.what());
   }
@@ -197,20 +196,16 @@ grpc::Status JobService::GetReport(grpc::ServerContext* call, const v1::GetRepor
                     "job_id: job " + std::to_string(job.id) + " is " + storage::to_string(job.state) + " and has no report");
     const nlohmann::json& r = report->report;
     reply->set_job_id(job.id);
-    reply->set_configuration(r.value("configuration", job.configuration));
-    const nlohmann::json consistency = r.value("consistency_error_m", nlohmann::json::object());
-    const nlohmann::json trajectory = r.value("trajectory_error_m", nlohmann::json::object());
-    stats(consistency.value("optimized", nlohmann::json()), reply->mutable_consistency());
-    stats(consistency.value("dead_reckoning", nlohmann::json()), reply->mutable_consistency_dr());
-    stats(trajectory.value("optimized", nlohmann::json()), reply->mutable_trajectory());
-    stats(trajectory.value("dead_reckoning", nlohmann::json()), reply->mutable_trajectory_dr());
-    const nlohmann::json histogram = consistency.value("histogram", nlohmann::json::object());
-    reply->set_histogram_bin_width_m(histogram.value("bin_width_m", 0.0));
-    for (const nlohmann::json& count : histogram.value("counts", nlohmann::json::array()))
-      reply->add_histogram_counts(count.get<std::int64_t>());
-    const nlohmann::json constraints = r.value("constraints", nlohmann::json::object());
-    constraint_stats(constraints.value("by_type", nlohmann::json::object()), reply->mutable_constraints_by_type());
-    constraint_stats(constraints.value("by_path", nlohmann::json::object()), reply->mutable_constraints_by_path());
+    const ReportSummary summary = report_summary_from_json(r);
+    reply->set_configuration(summary.configuration);
+    stats(summary.consistency, reply->mutable_consistency());
+    stats(summary.consistency_dr, reply->mutable_consistency_dr());
+    stats(summary.trajectory, reply->mutable_trajectory());
+    stats(summary.trajectory_dr, reply->mutable_trajectory_dr());
+    reply->set_histogram_bin_width_m(summary.histogram.bin_width);
+    for (const std::size_t count : summary.histogram.counts) reply->add_histogram_counts(static_cast<std::int64_t>(count));
+    constraint_stats(summary.by_type, reply->mutable_constraints_by_type());
+    constraint_stats(summary.by_path, reply->mutable_constraints_by_path());
     for (const auto& [name, png] : report->plots) {
       v1::Plot* plot = reply->add_plots();
       plot->set_name(name);

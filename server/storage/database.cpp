@@ -74,6 +74,12 @@ int Result::affected() const {
   return *count ? std::atoi(count) : 0;
 }
 
+int Result::column(const char* name) const {
+  const int index = PQfnumber(result_.get(), name);
+  if (index < 0) throw DatabaseError("42703", std::string("the result has no column '") + name + "'");
+  return index;
+}
+
 std::string_view Result::text(int row, int column) const {
   return {PQgetvalue(result_.get(), row, column),
           static_cast<std::size_t>(PQgetlength(result_.get(), row, column))};

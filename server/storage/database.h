@@ -70,6 +70,9 @@ class Result {
   int rows() const { return PQntuples(result_.get()); }
   int affected() const;  // rows changed by INSERT/UPDATE/DELETE
   bool is_null(int row, int column) const { return PQgetisnull(result_.get(), row, column) == 1; }
+  // The index of a column by its name, so that a row mapper does not depend on the SELECT's
+  // order; throws DatabaseError naming the column when the result has none of that name.
+  int column(const char* name) const;
   std::string_view text(int row, int column) const;
   std::int64_t int64(int row, int column) const;
   double float8(int row, int column) const;

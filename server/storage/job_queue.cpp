@@ -1,5 +1,7 @@
 #include "server/storage/job_queue.h"
 
+#include "core/pipeline/pipeline_config.h"
+
 #include <array>
 #include <memory>
 #include <stdexcept>
@@ -36,8 +38,7 @@ JobQueue::JobQueue(ConnectionPool& pool, QueueOptions options) : pool_(pool), op
 }
 
 std::int64_t JobQueue::enqueue(const NewJob& job) {
-  if (job.configuration != "odometry" && job.configuration != "gicp" && job.configuration != "mchs")
-    throw std::invalid_argument("unknown configuration '" + job.configuration + "' (odometry, gicp or mchs)");
+  parse_configuration(job.configuration);  // throws std::invalid_argument naming it
   if (job.max_attempts < 1) throw std::invalid_argument("max_attempts must be at least 1");
   const nlohmann::json parameters = job.parameters.is_null() ? nlohmann::json::object() : job.parameters;
   if (!parameters.is_object()) throw std::invalid_argument("job parameters must be a JSON object");

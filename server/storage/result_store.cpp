@@ -73,12 +73,6 @@ std::string polygon(const Footprint& footprint) {
   return text + ")";
 }
 
-ConstraintType parse_constraint_type(std::string_view text) {
-  if (text == "odometry") return ConstraintType::kOdometry;
-  if (text == "adjacent") return ConstraintType::kAdjacent;
-  if (text == "loop") return ConstraintType::kLoop;
-  throw std::runtime_error("constraint type '" + std::string(text) + "' is not known to this version of the core");
-}
 
 }  // namespace
 
@@ -133,64 +127,89 @@ std::vector<int> ResultStore::submaps_overlapping(std::int64_t job_id, const Eig
   return indices;
 }
 
+namespace {
+
+// The constraints table's columns besides job_id: constraint_row binds them in this order and
+// constraint_from reads them by name.
+constexpr std::array<const char*, 23> kConstraintColumns = {
+    "idx",        "type",           "path",           "from_submap",      "to_submap",     "measured",
+    "information", "converged",     "fitness",        "overlap_points",   "overlap_mse_m2", "overlap_fraction",
+    "accepted",   "rejection",      "reason",         "exclusion",        "exclusion_reason", "anchor",
+    "path_reason", "feature_density", "matches",      "inlier_ratio",     "guess"};
+
+std::vector<Param> constraint_row(std::int64_t job_id, std::size_t idx, const Constraint& c) {
+  // Row-major, the order a reader of the table expects.
+  const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> information = c.information;
+  std::optional<std::string> path;
+  if (c.path) path = to_string(*c.path);
+  return {job_id, idx, bathyslam::to_string(c.type), path, c.from, c.to, pose_array(c.measured),
+          float8_array(information.data(), 36), c.quality.converged, c.quality.fitness, c.quality.overlap_points,
+          c.quality.overlap_mse_m2, c.overlap_fraction, c.accepted(), to_string(c.rejection.kind), c.rejection.detail,
+          to_string(c.exclusion.kind), c.exclusion.detail, float8_array(c.anchor.data(), 3), c.path_reason,
+          c.feature_density, c.matches, c.inlier_ratio, pose_array(c.guess)};
+}
+
+Constraint constraint_from(const Result& rows, int row) {
+  auto at = [&](const char* name) { return rows.column(name); };
+  Constraint c;
+  c.type = parse_constraint_type(std::string(rows.text(row, at("type"))));
+  if (const auto path = rows.optional_text(row, at("path"))) c.path = parse_registration_path(*path);
+  c.from = static_cast<int>(rows.int64(row, at("from_submap")));
+  c.to = static_cast<int>(rows.int64(row, at("to_submap")));
+  c.measured = parse_pose(rows.text(row, at("measured")));
+  c.guess = parse_pose(rows.text(row, at("guess")));
+  const std::vector<double> information = parse_float8_array(rows.text(row, at("information")));
+  if (information.size() != 36) throw std::runtime_error("an information matrix needs 36 numbers");
+  c.information = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(information.data());
+  c.quality.converged = rows.boolean(row, at("converged"));
+  c.quality.fitness = rows.float8(row, at("fitness"));
+  c.quality.overlap_points = static_cast<std::size_t>(rows.int64(row, at("overlap_points")));
+  c.quality.overlap_mse_m2 = rows.float8(row, at("overlap_mse_m2"));
+  c.overlap_fraction = rows.float8(row, at("overlap_fraction"));
+  c.rejection = {parse_rejection_kind(std::string(rows.text(row, at("rejection")))), std::string(rows.text(row, at("reason")))};
+  c.exclusion = {parse_rejection_kind(std::string(rows.text(row, at("exclusion")))),
+                 std::string(rows.text(row, at("exclusion_reason")))};
+  const std::vector<double> anchor = parse_float8_array(rows.text(row, at("anchor")));
+  if (anchor.size() != 3) throw std::runtime_error("an anchor needs 3 numbers");
+  c.anchor = Eigen::Vector3d(anchor[0], anchor[1], anchor[2]);
+  c.path_reason = rows.text(row, at("path_reason"));
+  c.feature_density = rows.float8(row, at("feature_density"));
+  c.matches = static_cast<int>(rows.int64(row, at("matches")));
+  c.inlier_ratio = rows.float8(row, at("inlier_ratio"));
+  return c;
+}
+
+// INSERT INTO constraints (job_id, idx, ...) VALUES ($1, $2, ...).
+std::string constraint_insert() {
+  std::string columns = "job_id", values = "$1";
+  for (std::size_t k = 0; k < kConstraintColumns.size(); ++k) {
+    columns += std::string(", ") + kConstraintColumns[k];
+    values += ", $" + std::to_string(k + 2);
+  }
+  return "INSERT INTO constraints (" + columns + ") VALUES (" + values + ")";
+}
+
+}  // namespace
+
 void ResultStore::save_constraints(std::int64_t job_id, const std::vector<Constraint>& constraints) {
+  static const std::string insert = constraint_insert();
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   for (std::size_t i = 0; i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
-    if ((c.type == ConstraintType::kOdometry) != c.path.empty())
+    if ((c.type == ConstraintType::kOdometry) == c.path.has_value())
       throw std::invalid_argument("constraint " + std::to_string(i) +
                                   ": odometry constraints have no registration path, registrations need one");
-    // Row-major, the order a reader of the table expects.
-    const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> information = c.information;
-    std::optional<std::string> path;
-    if (!c.path.empty()) path = c.path;
-    connection->exec(
-        "INSERT INTO constraints (job_id, idx, type, path, from_submap, to_submap, measured, information,"
-        " converged, fitness, overlap_points, overlap_mse_m2, overlap_fraction, accepted, reason,"
-        " anchor, path_reason, feature_density, matches, inlier_ratio)"
-        " VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20)",
-        {job_id, i, bathyslam::to_string(c.type), path, c.from, c.to, pose_array(c.measured),
-         float8_array(information.data(), 36), c.quality.converged, c.quality.fitness, c.quality.overlap_points,
-         c.quality.overlap_mse_m2, c.overlap_fraction, c.accepted, c.reason, float8_array(c.anchor.data(), 3),
-         c.path_reason, c.feature_density, c.matches, c.inlier_ratio});
+    connection->exec(insert, constraint_row(job_id, i, c));
   }
   transaction.commit();
 }
 
 std::vector<Constraint> ResultStore::load_constraints(std::int64_t job_id) {
   auto connection = pool_.acquire();
-  Result rows = connection->exec(
-      "SELECT type, path, from_submap, to_submap, measured, information, converged, fitness, overlap_points,"
-      " overlap_mse_m2, overlap_fraction, accepted, reason, anchor, path_reason, feature_density, matches,"
-      " inlier_ratio FROM constraints WHERE job_id = $1 ORDER BY idx",
-      {job_id});
-  std::vector<Constraint> constraints(rows.rows());
-  for (int row = 0; row < rows.rows(); ++row) {
-    Constraint& c = constraints[row];
-    c.type = parse_constraint_type(rows.text(row, 0));
-    c.path = rows.optional_text(row, 1).value_or("");
-    c.from = static_cast<int>(rows.int64(row, 2));
-    c.to = static_cast<int>(rows.int64(row, 3));
-    c.measured = parse_pose(rows.text(row, 4));
-    std::vector<double> information = parse_float8_array(rows.text(row, 5));
-    if (information.size() != 36) throw std::runtime_error("an information matrix needs 36 numbers");
-    c.information = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(information.data());
-    c.quality.converged = rows.boolean(row, 6);
-    c.quality.fitness = rows.float8(row, 7);
-    c.quality.overlap_points = static_cast<std::size_t>(rows.int64(row, 8));
-    c.quality.overlap_mse_m2 = rows.float8(row, 9);
-    c.overlap_fraction = rows.float8(row, 10);
-    c.accepted = rows.boolean(row, 11);
-    c.reason = rows.text(row, 12);
-    const std::vector<double> anchor = parse_float8_array(rows.text(row, 13));
-    if (anchor.size() != 3) throw std::runtime_error("an anchor needs 3 numbers");
-    c.anchor = Eigen::Vector3d(anchor[0], anchor[1], anchor[2]);
-    c.path_reason = rows.text(row, 14);
-    c.feature_density = rows.float8(row, 15);
-    c.matches = static_cast<int>(rows.int64(row, 16));
-    c.inlier_ratio = rows.float8(row, 17);
-  }
+  const Result rows = connection->exec("SELECT * FROM constraints WHERE job_id = $1 ORDER BY idx", {job_id});
+  std::vector<Constraint> constraints;
+  for (int row = 0; row < rows.rows(); ++row) constraints.push_back(constraint_from(rows, row));
   return constraints;
 }
 

@@ -9,7 +9,7 @@ trap 'rm -rf "$work"' EXIT
 "$BATHYSLAM" simulate --scenario small --seed 2 --drift paper --out "$work/s" > /dev/null
 "$BATHYSLAM" process "$work/s" --config gicp --out "$work/gicp" > /dev/null 2>&1
 "$REGRAPH" "$work/s" "$work/gicp/report.json" > "$work/same.txt"
-"$REGRAPH" "$work/s" "$work/gicp/report.json" --uniform gicp.sigma_x_m=0.05 gicp.sigma_y_m=0.05 > "$work/tight.txt"
+"$REGRAPH" "$work/s" "$work/gicp/report.json" --uniform uniform_information.sigma_translation_m.x=0.05 uniform_information.sigma_translation_m.y=0.05 > "$work/tight.txt"
 /usr/bin/python3 - "$work/gicp/report.json" "$work/same.txt" "$work/tight.txt" <<'PY'
 import json, re, sys
 r = json.load(open(sys.argv[1]))

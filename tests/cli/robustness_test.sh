@@ -9,8 +9,8 @@ trap 'rm -rf "$work"' EXIT
 rows="$(dirname "$0")/../../bench/robustness_rows.py"
 
 # The paper's method: every defence of issue 14 off.
-literal=(--set robust.dr_gate=0 --set robust.consistency=0 --set robust.safety_net=0 --set accept.min_distinctness=0
-         --set accept.max_competitor_ratio=0 --set quality.direct_depth_from_relief=0 --set quality.sigma_yaw_rad=0.004)
+literal=(--set robustness.dr_gate=0 --set robustness.consistency=0 --set robustness.safety_net=0 --set acceptance.min_distinctness=0
+         --set acceptance.max_competitor_ratio=0 --set quality.direct_depth_from_relief=0 --set quality.best_sigma_rotation_rad.yaw=0.004)
 
 check() {  # terrain drift seed [simulate options] [-- process options] -> the mchs row's check column
   local bundle="$work/$1-$2-$3" terrain=$1 drift=$2 seed=$3

@@ -68,9 +68,9 @@ grep -q "LAYOUT=COG" "$work/gdalinfo.txt"
 grep -q "COMPRESSION=ZSTD" "$work/gdalinfo.txt"
 grep -q 'ID\["EPSG",32651\]' "$work/gdalinfo.txt"
 test ! -e "$work/odo/map_difference.png"  # odometry has no dead reckoning to compare with
-if "$BATHYSLAM" process "$work/s" --set gicp.max_iterations=-3 --out "$work/bad" 2> "$work/err.txt"; then
+if "$BATHYSLAM" process "$work/s" --set registration.gicp.max_iterations=-3 --out "$work/bad" 2> "$work/err.txt"; then
   echo "process accepted an out-of-range parameter" >&2
   exit 1
 fi
-grep -q "parameter 'gicp.max_iterations': -3 is outside" "$work/err.txt"
+grep -q "parameter 'registration.gicp.max_iterations': -3 is outside" "$work/err.txt"
 echo "cli: process ok"

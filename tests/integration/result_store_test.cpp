@@ -102,7 +102,7 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
   odometry.measured = a_pose(0.01, 40.0, 0.125, -0.5);
   Constraint registration;
   Constraint& c = registration;
-  c.path = "feature-aided";
+  c.path = RegistrationPath::kFeatureAided;
   c.type = ConstraintType::kAdjacent;
   c.from = 0;
   c.to = 2;
@@ -111,21 +111,24 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
     for (int k = 0; k < 6; ++k) c.information(r, k) = r == k ? 100.0 / (r + 1) : 0.01 * (r + 1) * (k + 2);
   c.quality = {true, 0.123456789, 1234, 0.0625};
   c.overlap_fraction = 0.37;
-  c.accepted = false;
-  c.reason = "overlap MSE 6.1 m² > 5 m²";
+  c.rejection = {RejectionKind::kOverlapMse, "6.1 m² > 5 m²"};
+  c.guess = a_pose(0.05, 79.0, 0.5, 0.2);
   c.anchor = Eigen::Vector3d(1.0 / 3.0, -14.75, 10.125);
   c.path_reason = "feature density 0.0210 >= 0.0050, 46 matches";
   c.feature_density = 0.021;
   c.matches = 46;
   c.inlier_ratio = 0.8125;
-  f.results.save_constraints(f.job, {odometry, registration});
+  Constraint left_out = registration;  // accepted, then dropped by the back end
+  left_out.rejection = {};
+  left_out.exclusion = {RejectionKind::kSafetyNet, "pulled 7.2 sigma against the solution"};
+  f.results.save_constraints(f.job, {odometry, registration, left_out});
 
   std::vector<Constraint> loaded = f.results.load_constraints(f.job);
-  ASSERT_EQ(loaded.size(), 2u);
-  EXPECT_EQ(loaded[0].path, "");
+  ASSERT_EQ(loaded.size(), 3u);
+  EXPECT_EQ(loaded[0].path, std::nullopt);
   EXPECT_EQ(loaded[0].type, ConstraintType::kOdometry);
   EXPECT_EQ(loaded[0].information, Information6::Identity());
-  EXPECT_TRUE(loaded[0].accepted);
+  EXPECT_TRUE(loaded[0].in_graph());
   const Constraint& l = loaded[1];
   EXPECT_EQ(l.path, c.path);
   EXPECT_EQ(l.type, c.type);
@@ -138,8 +141,14 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
   EXPECT_EQ(l.quality.overlap_points, c.quality.overlap_points);
   EXPECT_EQ(l.quality.overlap_mse_m2, c.quality.overlap_mse_m2);
   EXPECT_EQ(l.overlap_fraction, c.overlap_fraction);
-  EXPECT_EQ(l.accepted, c.accepted);
-  EXPECT_EQ(l.reason, c.reason);
+  EXPECT_EQ(l.rejection.kind, c.rejection.kind);
+  EXPECT_EQ(l.rejection.detail, c.rejection.detail);
+  EXPECT_FALSE(l.accepted());
+  expect_same_pose(l.guess, c.guess);
+  EXPECT_TRUE(loaded[2].accepted());
+  EXPECT_FALSE(loaded[2].in_graph());
+  EXPECT_EQ(loaded[2].exclusion.kind, RejectionKind::kSafetyNet);
+  EXPECT_EQ(loaded[2].exclusion.detail, left_out.exclusion.detail);
   EXPECT_EQ(l.anchor, c.anchor);
   EXPECT_EQ(l.path_reason, c.path_reason);
   EXPECT_EQ(l.feature_density, c.feature_density);
@@ -151,9 +160,9 @@ TEST(ResultStore, ConstraintsRoundTripEveryField) {
   dangling.to = 7;
   EXPECT_THROW(f.results.save_constraints(f.job, {dangling}), DatabaseError);
   Constraint pathless = registration;
-  pathless.path.clear();
+  pathless.path.reset();
   EXPECT_THROW(f.results.save_constraints(f.job, {pathless}), std::invalid_argument);
-  EXPECT_EQ(f.results.load_constraints(f.job).size(), 2u);
+  EXPECT_EQ(f.results.load_constraints(f.job).size(), 3u);
 }
 
 TEST(ResultStore, PosesTilesAndReportsRoundTrip) {

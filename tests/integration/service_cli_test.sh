@@ -32,10 +32,10 @@ fi
 grep -q "resuming pings.csv at" "$work/tar2.err" || fail "tar upload did not resume: $(cat "$work/tar2.err")"
 grep -Eq "^survey [0-9]+ ready$" "$work/tar2" || fail "$(cat "$work/tar2")"
 
-if "$BATHYSLAM" submit "$survey" --config gicp --set gicp.max_iterations=0 2> "$work/bad.err"; then
+if "$BATHYSLAM" submit "$survey" --config gicp --set registration.gicp.max_iterations=0 2> "$work/bad.err"; then
   fail "an out-of-range parameter was accepted"
 fi
-grep -q "INVALID_ARGUMENT: parameters\[gicp.max_iterations\]" "$work/bad.err" || fail "$(cat "$work/bad.err")"
+grep -q "INVALID_ARGUMENT: parameters\[registration.gicp.max_iterations\]" "$work/bad.err" || fail "$(cat "$work/bad.err")"
 
 job=$("$BATHYSLAM" submit "$survey" --config gicp | awk '/^job/ {print $2}')
 # One active job per tenant on this server: a second one while the first runs is refused.

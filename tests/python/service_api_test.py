@@ -325,7 +325,7 @@ class ServiceApiTest(unittest.TestCase):
                          survey_pb2.ListSurveysRequest(page_token="nonsense"))
         survey_id = self.create("bad jobs")
         for configuration, parameters, field in [("slam", {}, "configuration"), ("", {}, "configuration"),
-                                                 ("gicp", {"gicp.max_iterations": "0"}, "parameters[gicp.max_iterations]"),
+                                                 ("gicp", {"registration.gicp.max_iterations": "0"}, "parameters[registration.gicp.max_iterations]"),
                                                  ("gicp", {"no.such": "1"}, "parameters[no.such]")]:
             details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.jobs.SubmitJob,
                                        job_pb2.SubmitJobRequest(survey_id=survey_id, configuration=configuration,
@@ -340,7 +340,7 @@ class ServiceApiTest(unittest.TestCase):
     def test_cancelled_job_stops_within_two_seconds(self):
         survey_id = self.ready_survey("cancel")
         # A slow registration (many iterations on one thread), so the job is surely mid-stage.
-        slow = {"threads": "1", "gicp.max_iterations": "2000", "gicp.convergence": "1e-12"}
+        slow = {"threads": "1", "registration.gicp.max_iterations": "2000", "registration.gicp.convergence": "1e-12"}
         job = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="gicp", parameters=slow))
         self.watch(job.id, until=lambda e: e.stage == "register")
         self.jobs.CancelJob(job_pb2.CancelJobRequest(job_id=job.id), timeout=30)

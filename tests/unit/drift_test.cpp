@@ -38,7 +38,7 @@ TEST(PaperDrift, MeanDrErrorOverLakeMatchesThePaper) {
   EXPECT_NEAR(mean, kPaperMeanDrError_m, 0.25 * kPaperMeanDrError_m);
   const double sigma = calibrated_paper_sigma_yaw();
   EXPECT_GT(sigma, 1e-5);
-  EXPECT_LT(sigma, 1e-2) << "taken literally, 0.01 rad drifts hundreds of metres (design.md)";
+  EXPECT_LT(sigma, 1e-2) << "taken literally, 0.01 rad drifts hundreds of metres (docs/design.md)";
 }
 
 TEST(PaperDrift, FirstPoseSharedAndRollPitchUntouched) {

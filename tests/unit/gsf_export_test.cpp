@@ -10,6 +10,7 @@
 #include "core/fuse/soundings_csv.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/gsf/navigation_rewrite.h"
+#include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
 #include "core/sim/simulator.h"
 
@@ -50,8 +51,7 @@ class GsfExport : public ::testing::Test {
   static void SetUpTestSuite() {
     sim::SimulationConfig config;  // small, seed 1, the paper's drift
     simulation_ = new sim::Simulation(sim::simulate(config));
-    PipelineConfig pipeline;
-    pipeline.configuration = Configuration::kGicp;
+    PipelineConfig pipeline = preset_config(Configuration::kGicp);
     pipeline.threads = 1;
     result_ = new PipelineResult(run_pipeline(simulation_->survey, pipeline));
   }

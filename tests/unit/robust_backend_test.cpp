@@ -54,7 +54,7 @@ Constraint registration(const Survey2Lines& s, int from, int to, double ex = 0, 
   c.type = ConstraintType::kLoop;
   c.from = from;
   c.to = to;
-  c.path = "feature-aided";
+  c.path = RegistrationPath::kFeatureAided;
   c.measured = pose(ex, ey, eyaw) * Eigen::Translation3d(0, 0, 10.0) * (s.truth[from].inverse() * s.truth[to]);
   c.information = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
   return c;
@@ -72,11 +72,11 @@ TEST(DrGate, RefusesARegistrationTurnedFarBeyondWhatDeadReckoningCanDriftAndKeep
   Constraint good = registration(s, 5, 34), turned = registration(s, 5, 34, 3.0, -2.0, 120 * kDeg);
   gate_against_dead_reckoning(good, dr, s.result.dr_poses, PlausibilityConfig{});
   gate_against_dead_reckoning(turned, dr, s.result.dr_poses, PlausibilityConfig{});
-  EXPECT_TRUE(good.accepted) << good.reason;
+  EXPECT_TRUE(good.accepted()) << good.rejection.text();
   EXPECT_LT(good.dr_mahalanobis2, 16.27);
-  EXPECT_FALSE(turned.accepted);
+  EXPECT_FALSE(turned.accepted());
   EXPECT_GT(turned.dr_mahalanobis2, 100.0);
-  EXPECT_NE(turned.reason.find("implausible against dead reckoning"), std::string::npos) << turned.reason;
+  EXPECT_EQ(turned.rejection.kind, RejectionKind::kImplausible) << turned.rejection.text();
 }
 
 TEST(ConsistencySelection, LeavesOutTheRegistrationsThatDisagreeAndNeverTouchesDepthOnlyEdges) {
@@ -87,16 +87,16 @@ TEST(ConsistencySelection, LeavesOutTheRegistrationsThatDisagreeAndNeverTouchesD
   constraints.push_back(registration(s, 9, 31, -15.0, 0.0, -8 * kDeg));                    // wrong
   Constraint depth_only = registration(s, 10, 29, 25.0, 25.0, 0.0);  // far off, but only depth
   for (int k : {0, 1, 5}) depth_only.information(k, k) = 0;
-  depth_only.path = "direct";
+  depth_only.path = RegistrationPath::kDirect;
   constraints.push_back(depth_only);
 
   const DrNoiseModel dr(s.result.dr_poses, GraphConfig{});
   select_consistent_registrations(constraints, dr, s.result.dr_poses, LoopConsistencyConfig{});
   const std::size_t n = constraints.size();
-  for (std::size_t k = n - 9; k < n - 3; ++k) EXPECT_TRUE(constraints[k].in_graph()) << k << ": " << constraints[k].excluded;
+  for (std::size_t k = n - 9; k < n - 3; ++k) EXPECT_TRUE(constraints[k].in_graph()) << k << ": " << constraints[k].exclusion.text();
   EXPECT_FALSE(constraints[n - 3].in_graph());
   EXPECT_FALSE(constraints[n - 2].in_graph());
-  EXPECT_NE(constraints[n - 2].excluded.find("inconsistent"), std::string::npos);
+  EXPECT_EQ(constraints[n - 2].exclusion.kind, RejectionKind::kInconsistent);
   EXPECT_TRUE(constraints[n - 1].in_graph()) << "an edge without horizontal information cannot bend the survey";
 }
 

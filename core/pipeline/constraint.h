@@ -1,0 +1,54 @@
+#pragma once
+// What the pipeline knows between two submaps: odometry from dead reckoning, or a registration
+// of an adjacent survey line or a loop closure, with why it was refused if it was.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "core/accept/rejection.h"
+#include "core/graph/pose_graph.h"
+#include "core/register/coarse_to_fine.h"
+#include "core/register/gicp.h"
+#include "core/register/uniqueness.h"
+
+namespace bathyslam {
+
+enum class ConstraintType { kOdometry, kAdjacent, kLoop };
+std::string to_string(ConstraintType type);
+ConstraintType parse_constraint_type(const std::string& text);  // throws std::invalid_argument
+
+struct Constraint {
+  ConstraintType type = ConstraintType::kOdometry;
+  int from = 0, to = 0;
+  Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();  // `to` in the frame of `from`
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  // registrations: overlap centroid, `to`'s frame
+  // Registrations: the predicted pose of `to` in `from` the pair was registered from (the
+  // feature-aided path starts GICP from RANSAC's estimate instead).
+  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
+  Information6 information = Information6::Identity();
+  RegistrationQuality quality;   // registrations only
+  double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time
+  std::optional<RegistrationPath> path;  // registrations only
+  std::string path_reason;       // the switch's decision in words
+  double feature_density = 0;
+  int matches = 0;
+  double inlier_ratio = 0;
+  int competitor_inliers = 0;    // RANSAC's best distinct alternative
+  double competitor_separation_m = 0;
+  Uniqueness uniqueness;         // the terrain probed around the answer (register/uniqueness.h)
+  double dr_mahalanobis2 = -1;   // the DR gate's statistic (x, y, yaw); negative: not tested
+  Rejection rejection;           // by the registration tests or the DR gate
+  Rejection exclusion;           // accepted, then left out of the graph by the back end
+  bool accepted() const { return !rejection.rejected(); }
+  bool in_graph() const { return accepted() && !exclusion.rejected(); }
+  // Why it is not in the graph (empty when it is).
+  const Rejection& why_not() const { return rejection.rejected() ? rejection : exclusion; }
+};
+
+// Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information
+// (Table 1's by default).
+std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph);
+
+}  // namespace bathyslam

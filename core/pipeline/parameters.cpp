@@ -1,0 +1,125 @@
+#include "core/pipeline/parameters.h"
+
+#include <charconv>
+#include <cmath>
+#include <optional>
+#include <type_traits>
+
+namespace bathyslam {
+namespace {
+
+// Names before 2026-12, when they did not yet follow the fields' paths: stored jobs and scripts
+// may still use them. A prefix rename ends with '.'.
+constexpr std::pair<std::string_view, std::string_view> kRenamed[] = {
+    {"gicp.sigma_x_m", "uniform_information.sigma_translation_m.x"},
+    {"gicp.sigma_y_m", "uniform_information.sigma_translation_m.y"},
+    {"gicp.sigma_z_m", "uniform_information.sigma_translation_m.z"},
+    {"gicp.sigma_roll_rad", "uniform_information.sigma_rotation_rad.roll"},
+    {"gicp.sigma_pitch_rad", "uniform_information.sigma_rotation_rad.pitch"},
+    {"gicp.sigma_yaw_rad", "uniform_information.sigma_rotation_rad.yaw"},
+    {"graph.dr_sigma_x_m", "graph.dr_sigma_translation_m.x"},
+    {"graph.dr_sigma_y_m", "graph.dr_sigma_translation_m.y"},
+    {"graph.dr_sigma_z_m", "graph.dr_sigma_translation_m.z"},
+    {"graph.dr_sigma_roll_rad", "graph.dr_sigma_rotation_rad.roll"},
+    {"graph.dr_sigma_pitch_rad", "graph.dr_sigma_rotation_rad.pitch"},
+    {"graph.dr_sigma_yaw_rad", "graph.dr_sigma_rotation_rad.yaw"},
+    {"quality.sigma_x_m", "quality.best_sigma_translation_m.x"},
+    {"quality.sigma_y_m", "quality.best_sigma_translation_m.y"},
+    {"quality.sigma_z_m", "quality.best_sigma_translation_m.z"},
+    {"quality.sigma_roll_rad", "quality.best_sigma_rotation_rad.roll"},
+    {"quality.sigma_pitch_rad", "quality.best_sigma_rotation_rad.pitch"},
+    {"quality.sigma_yaw_rad", "quality.best_sigma_rotation_rad.yaw"},
+    {"robust.plausibility_chi2", "robustness.pcm.plausibility.chi2_threshold"},
+    {"robust.pair_chi2", "robustness.pcm.pair_chi2_threshold"},
+    {"robust.safety_net_p", "robustness.line_check.p"},
+    {"batch_submaps", "stages.batch_submaps"},
+    {"gicp.", "registration.gicp."},
+    {"register.", "registration."},
+    {"matching.", "registration.matching."},
+    {"ransac.", "registration.ransac."},
+    {"switch.", "registration.switching."},
+    {"uniqueness.", "registration.uniqueness."},
+    {"accept.", "acceptance."},
+    {"robust.", "robustness."},
+    {"eval.", "consistency."},
+};
+
+std::string current_name(const std::string& name) {
+  for (const auto& [old_name, new_name] : kRenamed) {
+    if (old_name.back() != '.' && name == old_name) return std::string(new_name);
+    if (old_name.back() == '.' && name.rfind(old_name, 0) == 0) return std::string(new_name) + name.substr(old_name.size());
+  }
+  return name;
+}
+
+// Sets `name` to `value` (nullopt: the text was not a number) after the range check; messages
+// quote the value as the caller gave it (`shown`).
+void assign_parameter(PipelineConfig& config, const std::string& given_name, std::optional<double> value,
+                      const std::string& shown) {
+  const std::string name = current_name(given_name);
+  bool found = false;
+  config.fields([&](std::string_view key, auto& field, double min, double max) {
+    if (key != name) return;
+    found = true;
+    using Field = std::remove_reference_t<decltype(field)>;
+    constexpr bool integer = std::is_integral_v<Field> || std::is_enum_v<Field>;
+    if (!value || !std::isfinite(*value)) {
+      throw std::invalid_argument("parameter '" + given_name + "': '" + shown + "' is not a number");
+    }
+    const double v = *value;
+    if (v < min || v > max || (integer && v != std::floor(v))) {
+      throw std::invalid_argument("parameter '" + given_name + "': " + shown + " is outside [" +
+                                  std::to_string(min) + ", " + std::to_string(max) + "]" +
+                                  (integer ? " or not an integer" : ""));
+    }
+    if constexpr (std::is_enum_v<Field>) {
+      field = static_cast<Field>(static_cast<std::underlying_type_t<Field>>(v));
+    } else {
+      field = static_cast<Field>(v);
+    }
+  });
+  if (!found) throw std::invalid_argument("unknown parameter '" + given_name + "'");
+}
+
+}  // namespace
+
+void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value) {
+  std::optional<double> number;
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(value, &used);
+    if (used == value.size()) number = v;
+  } catch (const std::exception&) {
+  }
+  assign_parameter(config, name, number, value);
+}
+
+void set_parameter(PipelineConfig& config, const std::string& name, double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  assign_parameter(config, name, value, std::string(text, end));
+}
+
+void set_parameter(PipelineConfig& config, std::string_view assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string_view::npos) {
+    throw std::invalid_argument("expected name=value, got '" + std::string(assignment) + "'");
+  }
+  set_parameter(config, std::string(assignment.substr(0, eq)), std::string(assignment.substr(eq + 1)));
+}
+
+std::map<std::string, double> parameters(const PipelineConfig& config) {
+  std::map<std::string, double> out;
+  PipelineConfig copy = config;  // `fields` hands out references that may be written; these are not
+  copy.fields([&](std::string_view key, auto& field, double, double) {
+    using Field = std::remove_reference_t<decltype(field)>;
+    if constexpr (std::is_enum_v<Field>) {
+      out[std::string(key)] = static_cast<double>(static_cast<std::underlying_type_t<Field>>(field));
+    } else {
+      out[std::string(key)] = static_cast<double>(field);
+    }
+  });
+  return out;
+}
+
+}  // namespace bathyslam

@@ -1,0 +1,24 @@
+#pragma once
+// A configuration's fields by name: `--set`, a job's stored parameters and the report's. Names
+// are the fields' paths in PipelineConfig ("registration.gicp.neighbours"), listed beside each
+// struct (its `fields`); every field is settable and range-checked.
+#include <map>
+#include <string>
+#include <string_view>
+
+#include "core/pipeline/pipeline_config.h"
+
+namespace bathyslam {
+
+// Sets one parameter by its name; throws std::invalid_argument naming the parameter when the
+// name is unknown or the value out of range. Names from before the fields were named by their
+// paths ("gicp.neighbours") are still read, so that stored jobs and old scripts keep working.
+void set_parameter(PipelineConfig& config, const std::string& name, const std::string& value);
+// The same for a number already parsed (a job's stored parameters, a report's).
+void set_parameter(PipelineConfig& config, const std::string& name, double value);
+// The same from one "name=value" argument (`--set`); a missing '=' is named too.
+void set_parameter(PipelineConfig& config, std::string_view assignment);
+// Every parameter by name with its current value.
+std::map<std::string, double> parameters(const PipelineConfig& config);
+
+}  // namespace bathyslam

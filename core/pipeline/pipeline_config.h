@@ -1,0 +1,152 @@
+#pragma once
+// Everything a pipeline run is configured by. A configuration (odometry, gicp, mchs) is a preset
+// of these fields; each field can then be changed by name (parameters.h), so every ablation is
+// a `--set` rather than code. The driver reads only the Plan drawn from them once.
+#include <array>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/accept/acceptance.h"
+#include "core/candidates/candidates.h"
+#include "core/eval/metrics.h"
+#include "core/features/terrain_grid.h"
+#include "core/features/tsd_keypoints.h"
+#include "core/filter/voxel_filter.h"
+#include "core/graph/graph_check.h"
+#include "core/graph/loop_consistency.h"
+#include "core/graph/pose_graph.h"
+#include "core/register/coarse_to_fine.h"
+#include "core/submaps/submap.h"
+#include "core/types/fields.h"
+
+namespace bathyslam {
+
+enum class Configuration { kOdometry, kGicp, kMchs };
+// The names, in one place: the CLI's choices, the service's check and the report use these.
+inline constexpr std::array<const char*, 3> kConfigurationNames{"odometry", "gicp", "mchs"};
+Configuration parse_configuration(const std::string& name);  // throws std::invalid_argument
+std::string to_string(Configuration configuration);
+
+struct PipelineConfig {
+  // The preset this configuration started from, the name the report gives it.
+  Configuration configuration = Configuration::kMchs;
+
+  // Which stages run; the defaults are `mchs`'s.
+  struct Stages {
+    bool registration = true;   // 0: dead reckoning's odometry alone
+    bool feature_aided = true;  // TSD features and the observability switch; 0: every pair direct GICP
+    // Table 1 (b)'s acceptance and quality-weighted information; 0: every converged registration
+    // with uniform_information, as in the paper's baseline.
+    bool quality_aware = true;
+    bool loop_closures = true;  // loop-closure candidates beside the adjacent survey lines
+    // Register in survey order this many submaps at a time, each batch predicted from the
+    // trajectory corrected so far (pipeline.cpp, register_incrementally). 0: every pair at
+    // once, every guess straight from dead reckoning.
+    int batch_submaps = 10;
+
+    template <typename Field>
+    void fields(Field&& field) {
+      field("registration", registration, 0, 1);
+      field("feature_aided", feature_aided, 0, 1);
+      field("quality_aware", quality_aware, 0, 1);
+      field("loop_closures", loop_closures, 0, 1);
+      field("batch_submaps", batch_submaps, 0, 1000000);
+    }
+  } stages;
+
+  SubmapConfig submaps;
+  VoxelConfig voxel;
+  CandidateConfig candidates;
+  // GICP and the overlap crop for every registration; the switch, matching, RANSAC and the
+  // feature-aided refinement when stages.feature_aided.
+  CoarseToFineConfig registration;
+  GridConfig grid;
+  KeypointConfig keypoints;
+  AcceptanceConfig acceptance;
+  QualityConfig quality;
+
+  // Without stages.quality_aware every registration edge gets this information, as in the
+  // paper's baseline: the default weight of Table 1, its DR noise (5, 5, 1 m; 1e-4, 1e-4,
+  // 1e-2 rad). From dead reckoning GICP keeps its guess's horizontal error, and on slopes that
+  // error turns into a wrong depth, so a registration knows no more than a DR step does
+  // (README, "The three configurations", has the comparison).
+  struct UniformInformation {
+    Eigen::Vector3d sigma_translation_m{5.0, 5.0, 1.0};
+    Eigen::Vector3d sigma_rotation_rad{1e-4, 1e-4, 1e-2};
+
+    template <typename Field>
+    void fields(Field&& field) {
+      xyz("sigma_translation_m", sigma_translation_m, 1e-4, 1e3, field);
+      rpy("sigma_rotation_rad", sigma_rotation_rad, 1e-6, 10, field);
+    }
+  } uniform_information;
+
+  GraphConfig graph;
+
+  // The defences against wrong edges (issue 14); all 0 is the paper's literal method.
+  struct Robustness {
+    // Every registration against the noise dead reckoning accumulates between its submaps.
+    bool dr_gate = true;
+    // Pairwise consistency (PCM) among the registrations that carry horizontal information.
+    bool consistency = true;
+    LoopConsistencyConfig pcm;  // its plausibility threshold is the DR gate's too
+    // After the solve: lines tested against DR's noise, edges that pull beyond max_pull_sigma
+    // dropped one at a time (at most max_drops), and dead reckoning published if that fails.
+    bool safety_net = true;
+    GraphCheckConfig line_check;
+    double max_pull_sigma = 6.0;
+    int max_drops = 20;
+
+    template <typename Field>
+    void fields(Field&& field) {
+      field("dr_gate", dr_gate, 0, 1);
+      field("consistency", consistency, 0, 1);
+      nested("pcm", pcm, field);
+      field("safety_net", safety_net, 0, 1);
+      nested("line_check", line_check, field);
+      field("max_pull_sigma", max_pull_sigma, 0.1, 1e6);
+      field("max_drops", max_drops, 0, 100000);
+    }
+  } robustness;
+
+  ConsistencyConfig consistency;  // the evaluation's, of the published map
+  int threads = 0;                // 0: all cores
+
+  template <typename Field>
+  void fields(Field&& field) {
+    nested("stages", stages, field);
+    nested("submaps", submaps, field);
+    nested("voxel", voxel, field);
+    nested("candidates", candidates, field);
+    nested("registration", registration, field);
+    nested("grid", grid, field);
+    nested("keypoints", keypoints, field);
+    nested("acceptance", acceptance, field);
+    nested("quality", quality, field);
+    nested("uniform_information", uniform_information, field);
+    nested("graph", graph, field);
+    nested("robustness", robustness, field);
+    nested("consistency", consistency, field);
+    field("threads", threads, 0, 1024);
+  }
+};
+
+// The configuration's preset: `mchs` is the defaults; `gicp` the paper's baseline (direct GICP
+// on adjacent lines from dead reckoning, uniform information, no defences); `odometry` dead
+// reckoning alone.
+PipelineConfig preset_config(Configuration configuration);
+
+// What the driver does, decided once from the configuration.
+struct Plan {
+  bool registration = false;   // register candidate pairs at all
+  bool features = false;       // TSD features and the feature-aided path
+  bool quality_aware = false;  // acceptance tests and quality-weighted information
+  bool loop_closures = false;
+  int batch_submaps = 0;       // 0: one batch of every submap
+  bool dr_gate = false, consistency = false, safety_net = false;
+  int threads = 0;             // resolved: at least 1
+};
+Plan plan_of(const PipelineConfig& config);
+
+}  // namespace bathyslam

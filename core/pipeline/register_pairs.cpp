@@ -1,0 +1,82 @@
+#include "core/pipeline/register_pairs.h"
+
+#include "core/pipeline/parallel_for.h"
+#include "core/pipeline/robust_backend.h"
+
+namespace bathyslam {
+namespace {
+
+// A registration's constraint, with DR roll and pitch kept (keep_dr_roll_pitch) and the
+// switch's record; acceptance and information are the plan's to set.
+Constraint constraint_of(const Candidate& candidate, const PairRegistration& reg, const Eigen::Isometry3d& guess) {
+  Constraint c;
+  c.type = candidate.type;
+  c.from = candidate.pair.target;
+  c.to = candidate.pair.source;
+  c.measured = keep_dr_roll_pitch(reg.registration.source_to_target, guess, reg.anchor);
+  c.anchor = reg.anchor;
+  c.guess = guess;
+  c.quality = reg.registration.quality;
+  c.overlap_fraction = candidate.pair.overlap_fraction;
+  c.path = reg.path;
+  c.path_reason = reg.why;
+  c.feature_density = reg.feature_density;
+  c.matches = reg.matches;
+  c.inlier_ratio = reg.inlier_ratio;
+  c.competitor_inliers = reg.competitor_inliers;
+  c.competitor_separation_m = reg.competitor_separation_m;
+  c.uniqueness = reg.uniqueness;
+  return c;
+}
+
+// The paper's baseline keeps every registration that converged on some overlap.
+Rejection unless_converged(const PairRegistration& reg) {
+  if (reg.registration.quality.overlap_points == 0) return {RejectionKind::kNoOverlap, ""};
+  if (!reg.registration.quality.converged) return {RejectionKind::kNotConverged, ""};
+  return {};
+}
+
+Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Isometry3d>& estimate,
+                         const RegistrationInputs& in, const PipelineConfig& config, const Plan& plan) {
+  const CandidatePair& pair = candidate.pair;
+  const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
+  const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
+  const Cloud& target = *in.clouds[pair.target];
+  const Cloud& source = *in.clouds[pair.source];
+  PairRegistration reg;
+  if (plan.features) {
+    // RANSAC reproducible per pair, whatever thread or batch registers it.
+    const uint64_t seed = config.registration.ransac.seed ^
+                          (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
+    reg = register_coarse_to_fine(target, source, in.features[pair.target], in.features[pair.source], guess,
+                                  config.registration, seed, with_hessian);
+  } else {
+    reg = register_direct(target, source, guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian);
+  }
+  Constraint c = constraint_of(candidate, reg, guess);
+  if (plan.quality_aware) {
+    c.rejection = rejection_of(reg, guess, config.acceptance, candidate.type == ConstraintType::kLoop);
+    const Eigen::Matrix3d level_from_target =
+        level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
+    if (c.accepted()) c.information = quality_information(reg, config.quality, level_from_target);
+  } else {
+    c.rejection = unless_converged(reg);
+    c.information = information_from_sigmas(config.uniform_information.sigma_translation_m,
+                                             config.uniform_information.sigma_rotation_rad);
+  }
+  if (plan.dr_gate) gate_against_dead_reckoning(c, in.dr, in.dr_poses, config.robustness.pcm.plausibility);
+  return c;
+}
+
+}  // namespace
+
+std::vector<Constraint> register_pairs(const std::vector<Candidate>& candidates,
+                                       const std::vector<Eigen::Isometry3d>& estimate, const RegistrationInputs& inputs,
+                                       const PipelineConfig& config, const Plan& plan, const std::atomic<bool>* cancel) {
+  std::vector<Constraint> constraints(candidates.size());
+  parallel_for(candidates.size(), plan.threads, cancel,
+               [&](std::size_t k) { constraints[k] = register_pair(candidates[k], estimate, inputs, config, plan); });
+  return constraints;
+}
+
+}  // namespace bathyslam

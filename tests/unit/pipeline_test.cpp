@@ -1,0 +1,218 @@
+// The whole pipeline on the `small` simulated survey (6 lines, 46 submaps, about two seconds to
+// simulate): each configuration against dead reckoning and the truth, its constraints by type and
+// path, threads, cancellation, the corrected navigation and the report.
+#include "core/pipeline/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "core/pipeline/corrected_navigation.h"
+#include "core/pipeline/parallel_for.h"
+#include "core/pipeline/report.h"
+#include "core/sim/simulator.h"
+
+namespace bathyslam {
+namespace {
+
+const Survey& small_survey() {
+  static const Survey survey = sim::simulate(sim::SimulationConfig{}).survey;
+  return survey;
+}
+
+PipelineResult run(Configuration configuration, int threads = 0) {
+  PipelineConfig config = preset_config(configuration);
+  config.threads = threads;
+  return run_pipeline(small_survey(), config);
+}
+
+double rmse(const std::vector<double>& errors) { return error_stats(errors).rmse; }
+
+struct Counts {
+  int odometry = 0, adjacent = 0, loop = 0;            // in the graph
+  int candidates = 0, direct = 0, feature_aided = 0;   // registrations, by path
+};
+
+Counts count(const PipelineResult& r) {
+  Counts n;
+  for (const Constraint& c : r.constraints) {
+    if (c.type != ConstraintType::kOdometry) {
+      ++n.candidates;
+      n.direct += c.path == RegistrationPath::kDirect;
+      n.feature_aided += c.path == RegistrationPath::kFeatureAided;
+    }
+    if (!c.in_graph()) continue;
+    n.odometry += c.type == ConstraintType::kOdometry;
+    n.adjacent += c.type == ConstraintType::kAdjacent;
+    n.loop += c.type == ConstraintType::kLoop;
+  }
+  return n;
+}
+
+// Horizontal RMS distance of a navigation to the survey's reference at the same samples.
+double navigation_rmse(const std::vector<NavSample>& nav, const std::vector<NavSample>& reference) {
+  double sum = 0;
+  for (std::size_t i = 0; i < nav.size(); ++i) {
+    sum += std::pow(nav[i].easting - reference[i].easting, 2) + std::pow(nav[i].northing - reference[i].northing, 2);
+  }
+  return std::sqrt(sum / static_cast<double>(nav.size()));
+}
+
+TEST(ParallelFor, CarriesAnIterationsExceptionOutOfTheLoop) {
+  std::atomic<int> ran = 0;
+  EXPECT_THROW(parallel_for(1000, 2, nullptr, [&](std::size_t i) {
+                 ++ran;
+                 std::this_thread::sleep_for(std::chrono::microseconds(100));  // a unit of work
+                 if (i == 7) throw std::runtime_error("iteration 7");
+               }),
+               std::runtime_error);
+  EXPECT_LT(ran.load(), 1000) << "the loop stops taking iterations after a failure";
+}
+
+TEST(ParallelFor, StopsWhenCancelledAndSaysSo) {
+  std::atomic<bool> cancel = false;
+  std::atomic<int> ran = 0;
+  EXPECT_THROW(parallel_for(1000, 2, &cancel, [&](std::size_t i) {
+                 ++ran;
+                 std::this_thread::sleep_for(std::chrono::microseconds(100));
+                 if (i == 3) cancel = true;
+               }),
+               Cancelled);
+  EXPECT_LT(ran.load(), 1000);
+}
+
+TEST(ParallelFor, RunsOnTheThreadsItIsGiven) {
+  for (int threads : {1, 2}) {
+    std::mutex mutex;
+    std::set<std::thread::id> seen;
+    parallel_for(64, threads, nullptr, [&](std::size_t) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      const std::lock_guard lock(mutex);
+      seen.insert(std::this_thread::get_id());
+    });
+    EXPECT_LE(static_cast<int>(seen.size()), threads);
+    if (threads == 2) EXPECT_EQ(seen.size(), 2u) << "64 iterations of 2 ms on 2 threads use both";
+  }
+}
+
+TEST(Pipeline, OdometryPublishesDeadReckoning) {
+  const PipelineResult r = run(Configuration::kOdometry);
+  const Counts n = count(r);
+  ASSERT_GT(r.submaps.submaps.size(), 20u);
+  EXPECT_EQ(n.odometry, static_cast<int>(r.submaps.submaps.size()) - 1);
+  EXPECT_EQ(n.candidates, 0);
+  for (std::size_t i = 0; i < r.dr_poses.size(); ++i) {
+    EXPECT_LT((r.optimized_poses[i].translation() - r.dr_poses[i].translation()).norm(), 1e-6) << "submap " << i;
+  }
+  EXPECT_NEAR(rmse(r.trajectory_errors), rmse(r.dr_trajectory_errors), 1e-6);
+  EXPECT_GT(rmse(r.dr_trajectory_errors), 1.0);  // the survey drifts: the tests below have something to remove
+}
+
+// The paper's baseline: adjacent survey lines registered directly from dead reckoning, no loops.
+TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
+  const PipelineResult r = run(Configuration::kGicp);
+  const Counts n = count(r);
+  EXPECT_GT(n.adjacent, 10);
+  EXPECT_EQ(n.loop, 0);
+  EXPECT_EQ(n.feature_aided, 0);
+  EXPECT_EQ(n.direct, n.candidates);
+  EXPECT_LT(r.consistency.stats.rmse, r.dr_consistency.stats.rmse);
+}
+
+class MchsPipeline : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { result_ = new PipelineResult(run(Configuration::kMchs)); }
+  static void TearDownTestSuite() { delete result_; }
+  static const PipelineResult& result() { return *result_; }
+
+ private:
+  static PipelineResult* result_;
+};
+PipelineResult* MchsPipeline::result_ = nullptr;
+
+TEST_F(MchsPipeline, RemovesMostOfTheDriftWithLoopClosures) {
+  const PipelineResult& r = result();
+  const Counts n = count(r);
+  EXPECT_GT(n.adjacent, 5);
+  EXPECT_GT(n.loop, 2);  // the check lines cross the lawnmower
+  EXPECT_GT(n.direct, 0);
+  EXPECT_GT(n.feature_aided, 0);
+  EXPECT_LT(rmse(r.trajectory_errors), 0.5 * rmse(r.dr_trajectory_errors));
+  EXPECT_LT(r.consistency.stats.rmse, 0.5 * r.dr_consistency.stats.rmse);
+  EXPECT_TRUE(r.safety_net.ran);
+  EXPECT_TRUE(r.safety_net.pass);
+  EXPECT_FALSE(r.safety_net.fell_back);
+}
+
+TEST_F(MchsPipeline, RejectionsSayWhy) {
+  for (const Constraint& c : result().constraints) {
+    if (c.type == ConstraintType::kOdometry) continue;
+    if (!c.accepted()) {
+      EXPECT_NE(c.rejection.kind, RejectionKind::kNone) << c.from << "-" << c.to;
+      EXPECT_FALSE(c.rejection.detail.empty()) << c.from << "-" << c.to;
+    } else {
+      EXPECT_EQ(c.rejection.kind, RejectionKind::kNone) << c.from << "-" << c.to;
+    }
+  }
+}
+
+TEST_F(MchsPipeline, CorrectedNavigationFollowsTheOptimizedSubmaps) {
+  const Survey& survey = small_survey();
+  const std::vector<NavSample> corrected = corrected_navigation(survey, result());
+  ASSERT_EQ(corrected.size(), survey.nav.size());
+  for (std::size_t i = 0; i < corrected.size(); i += 97) EXPECT_EQ(corrected[i].time, survey.nav[i].time);
+  ASSERT_TRUE(survey.reference_nav);
+  ASSERT_EQ(survey.reference_nav->size(), survey.nav.size());
+  const double before = navigation_rmse(survey.nav, *survey.reference_nav);
+  const double after = navigation_rmse(corrected, *survey.reference_nav);
+  EXPECT_LT(after, 0.5 * before) << "dead reckoning " << before << " m, corrected " << after << " m";
+}
+
+TEST_F(MchsPipeline, ReportCarriesTheResult) {
+  const PipelineResult& r = result();
+  const nlohmann::json j = report_json(r);
+  const Counts n = count(r);
+  EXPECT_EQ(j.at("configuration"), "mchs");
+  EXPECT_DOUBLE_EQ(j.at("trajectory_error_m").at("optimized").at("rmse").get<double>(), rmse(r.trajectory_errors));
+  EXPECT_DOUBLE_EQ(j.at("consistency_error_m").at("optimized").at("rmse").get<double>(), r.consistency.stats.rmse);
+  EXPECT_EQ(j.at("constraints").at("by_type").at("loop").at("accepted").get<int>(), n.loop);
+  EXPECT_EQ(j.at("registrations").size(), static_cast<std::size_t>(n.candidates));
+  EXPECT_EQ(j.at("safety_net").at("pass").get<bool>(), r.safety_net.pass);
+  // The stored parameters describe the run: set into a fresh configuration they give it back.
+  PipelineConfig again;
+  for (const auto& [name, value] : j.at("parameters").items()) set_parameter(again, name, value.get<double>());
+  EXPECT_EQ(parameters(again), parameters(r.config));
+}
+
+TEST(Pipeline, OneAndTwoThreadsGiveTheSameResult) {
+  const PipelineResult one = run(Configuration::kMchs, 1), two = run(Configuration::kMchs, 2);
+  ASSERT_EQ(one.constraints.size(), two.constraints.size());
+  for (std::size_t k = 0; k < one.constraints.size(); ++k) {
+    const Constraint &a = one.constraints[k], &b = two.constraints[k];
+    ASSERT_EQ(a.from, b.from);
+    ASSERT_EQ(a.to, b.to);
+    EXPECT_EQ(a.in_graph(), b.in_graph()) << a.from << "-" << a.to;
+    EXPECT_LT((a.measured.translation() - b.measured.translation()).norm(), 1e-9) << a.from << "-" << a.to;
+  }
+  for (std::size_t i = 0; i < one.optimized_poses.size(); ++i) {
+    EXPECT_LT((one.optimized_poses[i].translation() - two.optimized_poses[i].translation()).norm(), 1e-9);
+  }
+}
+
+TEST(Pipeline, CancellationStopsItDuringRegistration) {
+  std::atomic<bool> cancel = false;
+  std::vector<std::string> stages;
+  const PipelineConfig config = preset_config(Configuration::kMchs);
+  auto progress = [&](std::string_view stage, double) {
+    if (stages.empty() || stages.back() != stage) stages.emplace_back(stage);
+    if (stage == "register") cancel = true;
+  };
+  EXPECT_THROW(run_pipeline(small_survey(), config, progress, &cancel), Cancelled);
+  EXPECT_EQ(stages.back(), "register");
+}
+
+}  // namespace
+}  // namespace bathyslam
