@@ -1,31 +1,58 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "client/commands.h"
+#include "client/survey_options.h"
 #include "core/io/bundle.h"
+#include "core/io/survey_input.h"
 #include "core/summary/survey_summary.h"
 
 namespace bathyslam::cli {
 namespace {
 
 struct InspectOptions {
-  std::string bundle;
+  SurveyOptions survey;
   bool json = false;
 };
 
-void run_inspect(const InspectOptions& o) {
-  BundleReadResult result = read_bundle(o.bundle);
+void inspect_bundle(const std::string& bundle, bool json) {
+  BundleReadResult result = read_bundle(bundle);
   for (const Problem& p : result.problems) {
     if (p.file.empty()) std::fprintf(stderr, "%s\n", p.to_string().c_str());
-    else std::fprintf(stderr, "%s/%s\n", o.bundle.c_str(), p.to_string().c_str());
+    else std::fprintf(stderr, "%s/%s\n", bundle.c_str(), p.to_string().c_str());
   }
-  if (!result.survey) throw std::runtime_error(o.bundle + ": not a valid survey bundle");
+  if (!result.survey) throw std::runtime_error(bundle + ": not a valid survey bundle");
   const SurveySummary summary = summarize(*result.survey);
+  if (json) std::printf("%s\n", to_json(summary).dump(2).c_str());
+  else std::printf("%s", to_text(summary).c_str());
+}
+
+// GSF: what each file holds (pings, ignored pings, rejected beams, records), then the survey
+// bathyslam makes of them.
+void inspect_gsf(const InspectOptions& o) {
+  const LoadedSurvey loaded = load_survey(o.survey.input());
+  const SurveySummary summary = summarize(loaded.survey);
   if (o.json) {
-    std::printf("%s\n", to_json(summary).dump(2).c_str());
+    nlohmann::json files = nlohmann::json::array();
+    for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));
+    std::printf("%s\n", nlohmann::json{{"gsf_files", files}, {"survey", to_json(summary)}}.dump(2).c_str());
+    return;
+  }
+  for (const gsf::FileSummary& f : loaded.gsf_files) std::printf("%s", gsf::to_text(f).c_str());
+  std::printf("%s", to_text(summary).c_str());
+}
+
+void run_inspect(const InspectOptions& o) {
+  const std::vector<std::string>& inputs = o.survey.inputs;
+  if (inputs.size() == 1 && !gsf::is_gsf_path(inputs.front())) {
+    if (!o.survey.crs.empty() || !o.survey.reference_nav.empty()) {
+      throw std::runtime_error("--crs and --reference-nav are for GSF input");
+    }
+    inspect_bundle(inputs.front(), o.json);
   } else {
-    std::printf("%s", to_text(summary).c_str());
+    inspect_gsf(o);
   }
 }
 
@@ -33,8 +60,8 @@ void run_inspect(const InspectOptions& o) {
 
 void add_inspect_command(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
-  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey bundle and summarise it");
-  cmd->add_option("bundle", options->bundle, "survey bundle: a folder or a .tar of one")->required();
+  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle or GSF files) and summarise it");
+  add_survey_options(cmd, options->survey);
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->callback([options] { run_inspect(*options); });
 }

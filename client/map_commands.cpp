@@ -1,5 +1,5 @@
 // bathyslam tiles / map: download a job's map tiles (all, or those meeting a bounding box) and
-// the whole map as one Cloud Optimized GeoTIFF.
+// the whole map as one Cloud Optimized GeoTIFF or BAG.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +19,7 @@ struct MapOptions {
   std::int64_t job = 0;
   std::string out;
   std::string format = "geotiff";
+  std::string map_format = "cog";  // `map`: cog or bag
   std::vector<double> bbox;  // min easting, min northing, max easting, max northing
 };
 
@@ -98,6 +99,7 @@ void run_tiles(const MapOptions& o) {
 void run_map(const MapOptions& o) {
   v1::GetMapRequest request;
   request.set_job_id(o.job);
+  request.set_format(o.map_format == "bag" ? v1::BAG : v1::COG);
   auto context = o.remote.context();
   auto reader = v1::MapService::NewStub(o.remote.channel())->GetMap(context.get(), request);
   const std::int64_t size = save(reader, "GetMap", o.out);
@@ -117,9 +119,12 @@ void add_map_commands(CLI::App& app) {
   cmd->callback([tiles] { run_tiles(*tiles); });
 
   auto map = std::make_shared<MapOptions>();
-  cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF");
+  cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF or BAG");
   cmd->add_option("job", map->job, "job id")->required();
-  cmd->add_option("--out", map->out, "output file (.tif)")->required();
+  cmd->add_option("--format", map->map_format, "cog (elevation, uncertainty, count) or bag (elevation, uncertainty)")
+      ->check(CLI::IsMember({"cog", "bag"}))
+      ->capture_default_str();
+  cmd->add_option("--out", map->out, "output file (.tif or .bag)")->required();
   add_remote_options(cmd, map->remote);
   cmd->callback([map] { run_map(*map); });
 }

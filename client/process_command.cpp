@@ -6,9 +6,13 @@
 #include <vector>
 
 #include "client/commands.h"
+#include "client/survey_options.h"
 #include "core/fuse/fuse.h"
+#include "core/fuse/soundings_csv.h"
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
+#include "core/io/gsf/gsf_survey.h"
+#include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
@@ -18,13 +22,33 @@ namespace bathyslam::cli {
 namespace {
 
 struct ProcessOptions {
-  std::string bundle;
+  SurveyOptions survey;
   std::string config = "gicp";
   std::vector<std::string> sets;
   int threads = 0;
   FuseConfig fuse;
+  bool export_gsf = false;
+  bool export_soundings = false;
   std::string out;
 };
+
+// GSF input: each file copied with the corrected navigation in its ping headers
+// (OUT/<name>.corrected.gsf); a bundle: its pings written as OUT/corrected.gsf.
+void export_gsf(const ProcessOptions& o, const Survey& survey, const std::vector<NavSample>& corrected) {
+  const std::filesystem::path out(o.out);
+  if (!gsf::is_gsf_path(o.survey.inputs.front())) {
+    const std::uint64_t pings = gsf::write_survey(survey, corrected, out / "corrected.gsf");
+    std::printf("corrected.gsf: %llu pings with the corrected navigation\n", static_cast<unsigned long long>(pings));
+    return;
+  }
+  for (const std::filesystem::path input : o.survey.inputs) {
+    const std::string name = input.stem().string() + ".corrected.gsf";
+    const gsf::RewriteCount n = gsf::rewrite_navigation(input, out / name, corrected, survey.metadata.crs);
+    std::printf("%s: %llu of %llu pings with the corrected navigation, all %llu records kept\n", name.c_str(),
+                static_cast<unsigned long long>(n.rewritten), static_cast<unsigned long long>(n.pings),
+                static_cast<unsigned long long>(n.records));
+  }
+}
 
 void run_process(const ProcessOptions& o) {
   PipelineConfig config = preset_config(parse_configuration(o.config));
@@ -32,7 +56,7 @@ void run_process(const ProcessOptions& o) {
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  const Survey survey = load_bundle(o.bundle);
+  const Survey survey = load_survey(o.survey.input()).survey;
   std::string last_stage;
   const PipelineResult result = run_pipeline(survey, config, [&](std::string_view stage, double fraction) {
     if (stage != last_stage) {
@@ -45,7 +69,8 @@ void run_process(const ProcessOptions& o) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::filesystem::create_directories(o.out);
-  write_nav_csv(corrected_navigation(survey, result), std::filesystem::path(o.out) / "trajectory.csv");
+  const std::vector<NavSample> corrected = corrected_navigation(survey, result);
+  write_nav_csv(corrected, std::filesystem::path(o.out) / "trajectory.csv");
   const nlohmann::json report = report_json(result);
   {
     std::ofstream out(std::filesystem::path(o.out) / "report.json");
@@ -57,8 +82,14 @@ void run_process(const ProcessOptions& o) {
   const std::string map_files = write_map_products(result, survey.metadata, o.fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
+  if (o.export_gsf) export_gsf(o, survey, corrected);
+  if (o.export_soundings) {
+    const std::uint64_t n =
+        write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");
+    std::printf("soundings.csv: %llu corrected soundings\n", static_cast<unsigned long long>(n));
+  }
   std::printf("map %.2f m cells: %s (%.1f s)\n", o.fuse.resolution_m, map_files.c_str(), fuse_seconds);
-  std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, tiles/}\n", seconds + fuse_seconds,
+  std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
               o.out.c_str());
 }
 
@@ -66,8 +97,8 @@ void run_process(const ProcessOptions& o) {
 
 void add_process_command(CLI::App& app) {
   auto options = std::make_shared<ProcessOptions>();
-  CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey bundle offline");
-  cmd->add_option("bundle", options->bundle, "survey bundle: a folder or a .tar of one")->required();
+  CLI::App* cmd = app.add_subcommand("process", "Run a SLAM configuration on a survey offline");
+  add_survey_options(cmd, options->survey);
   cmd->add_option("--config", options->config, "odometry, gicp or mchs")
       ->check(CLI::IsMember(std::vector<std::string>(kConfigurationNames.begin(), kConfigurationNames.end())))
       ->capture_default_str();
@@ -79,6 +110,11 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--min-soundings", options->fuse.min_soundings, "fewer soundings in a cell: no data")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  cmd->add_flag("--export-gsf", options->export_gsf,
+                "also write the pings with the corrected navigation: GSF input file by file "
+                "(NAME.corrected.gsf, every record kept), a bundle as corrected.gsf");
+  cmd->add_flag("--export-soundings", options->export_soundings,
+                "also write soundings.csv: every corrected sounding (easting,northing,elevation,line,submap)");
   cmd->add_option("--out", options->out, "output folder")->required();
   cmd->callback([options] { run_process(*options); });
 }

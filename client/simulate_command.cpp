@@ -7,6 +7,7 @@
 
 #include "client/commands.h"
 #include "core/io/bundle.h"
+#include "core/io/gsf/gsf_survey.h"
 #include "core/sim/simulator.h"
 
 namespace bathyslam::cli {
@@ -21,8 +22,22 @@ struct SimulateOptions {
   std::optional<double> line_spacing_m;
   std::optional<double> wavelength_m;
   std::optional<double> wave_angle_deg;
+  std::string format = "bundle";
   std::string out;
 };
+
+// GSF: the pings with the dead-reckoning navigation in <out>/survey.gsf, and the truth beside it
+// in <out>/reference_nav.csv (GSF has no record for a second trajectory).
+std::string write_gsf_survey(const Survey& survey, const std::filesystem::path& out) {
+  std::filesystem::create_directories(out);
+  const std::uint64_t pings = gsf::write_survey(survey, survey.nav, out / "survey.gsf");
+  std::string written = (out / "survey.gsf").string() + " (" + std::to_string(pings) + " pings)";
+  if (survey.reference_nav) {
+    write_nav_csv(*survey.reference_nav, out / "reference_nav.csv");
+    written += " and reference_nav.csv";
+  }
+  return written;
+}
 
 void print_drift_model(const sim::SimulationConfig& config, const sim::Simulation& simulation,
                        bool sigma_yaw_given) {
@@ -59,7 +74,8 @@ void run_simulate(const SimulateOptions& o) {
 
   const auto start = std::chrono::steady_clock::now();
   const sim::Simulation simulation = sim::simulate(config);
-  write_bundle(simulation.survey, o.out);
+  if (o.format == "gsf") std::printf("wrote %s\n", write_gsf_survey(simulation.survey, o.out).c_str());
+  else write_bundle(simulation.survey, o.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -109,7 +125,11 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--sigma-yaw", options->sigma_yaw_rad,
                   "paper model: yaw noise per submap in rad (default: calibrated)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--out", options->out, "bundle folder to write")->required();
+  cmd->add_option("--format", options->format,
+                  "bundle (nav.csv, pings.csv, ...) or gsf (survey.gsf and reference_nav.csv)")
+      ->check(CLI::IsMember({"bundle", "gsf"}))
+      ->capture_default_str();
+  cmd->add_option("--out", options->out, "folder to write")->required();
   cmd->callback([options] { run_simulate(*options); });
 }
 

@@ -1,13 +1,16 @@
-// bathyslam upload BUNDLE: creates the survey (or finds the one of the same name that an
-// interrupted upload left), uploads each file from where the server's committed size says,
-// and finalizes it.
+// bathyslam upload BUNDLE | A.gsf [B.gsf ...]: creates the survey (or finds the one of the same
+// name that an interrupted upload left), uploads each file from where the server's committed
+// size says, and finalizes it.
 #include <openssl/evp.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +19,7 @@
 #include "client/remote.h"
 #include "core/io/bundle.h"
 #include "core/io/bundle_files.h"
+#include "core/io/gsf/gsf_survey.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -24,15 +28,30 @@ constexpr std::size_t kChunkBytes = 1 << 20;  // the API's largest chunk
 
 struct UploadOptions {
   Remote remote;
-  std::string bundle;
+  std::vector<std::string> inputs;  // one bundle, or GSF files
+  std::string crs;                  // GSF: the survey's CRS (default: the data's UTM zone)
+  std::string reference_nav;        // GSF: uploaded as reference_nav.csv
   std::string name;
   std::int64_t stop_after_bytes = 0;  // > 0: stop there, as a cut connection would (to test resuming)
 };
 
-std::string file_sha256(const BundleFiles& files, std::string_view file) {
+// One file to upload: the name the server stores it under, its size and its bytes from an offset.
+struct LocalFile {
+  std::string name;
+  std::int64_t size = 0;
+  std::function<std::unique_ptr<ByteSource>(std::uint64_t offset)> open;
+};
+
+// What the survey is declared as: its name, CRS, sonar and vehicle.
+struct Declaration {
+  std::string name, crs;
+  nlohmann::json sonar = nlohmann::json::object(), vehicle = nlohmann::json::object();
+};
+
+std::string file_sha256(const LocalFile& file) {
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), &EVP_MD_CTX_free);
   EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr);
-  const std::unique_ptr<ByteSource> in = files.open(file);
+  const std::unique_ptr<ByteSource> in = file.open(0);
   std::vector<char> buffer(4 << 20);
   while (const std::size_t n = in->read(buffer.data(), buffer.size())) EVP_DigestUpdate(context.get(), buffer.data(), n);
   std::array<unsigned char, 32> digest{};
@@ -46,28 +65,61 @@ std::string default_name(const std::filesystem::path& bundle) {
   return std::filesystem::is_directory(bundle) ? bundle.filename().string() : bundle.stem().string();
 }
 
-std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, const BundleFiles& files,
-                                   bool& ready) {
-  if (!files.contains(kSurveyJsonFile)) throw std::runtime_error(o.bundle + ": no survey.json");
-  const nlohmann::json meta = nlohmann::json::parse(read_all(*files.open(kSurveyJsonFile)), nullptr, false);
+// A bundle: survey.json declares it; its files in the bundle's order.
+std::vector<LocalFile> bundle_files(const UploadOptions& o, Declaration& declared) {
+  const auto files = std::make_shared<BundleFiles>(o.inputs.front());
+  if (!files->contains(kSurveyJsonFile)) throw std::runtime_error(o.inputs.front() + ": no survey.json");
+  const nlohmann::json meta = nlohmann::json::parse(read_all(*files->open(kSurveyJsonFile)), nullptr, false);
   if (meta.is_discarded() || !meta.is_object())
-    throw std::runtime_error(o.bundle + "/survey.json: not a JSON object (bathyslam inspect tells more)");
-  const std::string name = !o.name.empty() ? o.name : meta.value("name", default_name(o.bundle));
+    throw std::runtime_error(o.inputs.front() + "/survey.json: not a JSON object (bathyslam inspect tells more)");
+  declared = {!o.name.empty() ? o.name : meta.value("name", default_name(o.inputs.front())), meta.value("crs", ""),
+              meta.value("sonar", nlohmann::json::object()), meta.value("vehicle", nlohmann::json::object())};
+  std::vector<LocalFile> out;
+  for (std::string_view file : {kSurveyJsonFile, kNavFile, kPingsFile, kReferenceNavFile}) {
+    if (!files->contains(file)) continue;
+    out.push_back({std::string(file), static_cast<std::int64_t>(files->size(file)),
+                   [files, file](std::uint64_t offset) { return files->open(file, offset); }});
+  }
+  return out;
+}
+
+// GSF files: declared by the options; each under its own file name, the reference navigation
+// as reference_nav.csv. The server orders the files by time.
+std::vector<LocalFile> gsf_files(const UploadOptions& o, Declaration& declared) {
+  declared = {!o.name.empty() ? o.name : std::filesystem::path(o.inputs.front()).stem().string(), o.crs,
+              nlohmann::json::object(), nlohmann::json::object()};
+  auto local = [](const std::filesystem::path& path, std::string name) {
+    return LocalFile{std::move(name), static_cast<std::int64_t>(std::filesystem::file_size(path)),
+                     [path](std::uint64_t offset) { return std::make_unique<FileSource>(path, offset); }};
+  };
+  std::vector<LocalFile> out;
+  for (const std::string& input : o.inputs) {
+    const std::string name = std::filesystem::path(input).filename().string();
+    if (!gsf::is_gsf_file_name(name))
+      throw std::runtime_error(input + ": a GSF file name must be letters, digits, '.', '_' or '-' and end in .gsf");
+    out.push_back(local(input, name));
+  }
+  if (!o.reference_nav.empty()) out.push_back(local(o.reference_nav, std::string(kReferenceNavFile)));
+  return out;
+}
+
+std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, const Declaration& declared,
+                                   bool& ready) {
   v1::ListSurveysRequest list;
-  list.set_name(name);
+  list.set_name(declared.name);
   v1::ListSurveysResponse found;
   check("ListSurveys", surveys.ListSurveys(o.remote.context(30).get(), list, &found));
   if (found.surveys_size() > 0) {
     ready = found.surveys(0).state() == v1::Survey::READY;
-    std::fprintf(stderr, "survey %lld '%s' exists%s\n", static_cast<long long>(found.surveys(0).id()), name.c_str(),
+    std::fprintf(stderr, "survey %lld '%s' exists%s\n", static_cast<long long>(found.surveys(0).id()), declared.name.c_str(),
                  ready ? " and is ready" : ": resuming its upload");
     return found.surveys(0).id();
   }
   v1::CreateSurveyRequest create;
-  create.set_name(name);
-  create.set_crs(meta.value("crs", ""));
-  create.set_sonar_json(meta.value("sonar", nlohmann::json::object()).dump());
-  create.set_vehicle_json(meta.value("vehicle", nlohmann::json::object()).dump());
+  create.set_name(declared.name);
+  create.set_crs(declared.crs);
+  create.set_sonar_json(declared.sonar.dump());
+  create.set_vehicle_json(declared.vehicle.dump());
   v1::Survey survey;
   check("CreateSurvey", surveys.CreateSurvey(o.remote.context(30).get(), create, &survey));
   ready = false;
@@ -76,10 +128,10 @@ std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const Uploa
 
 // Uploads one file from the committed size on; false when stopped by --stop-after-bytes.
 bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t survey_id,
-                 const BundleFiles& files, std::string_view file, std::int64_t& budget) {
-  const std::string name(file);
-  const auto size = static_cast<std::int64_t>(files.size(file));
-  const std::string digest = file_sha256(files, file);
+                 const LocalFile& file, std::int64_t& budget) {
+  const std::string& name = file.name;
+  const std::int64_t size = file.size;
+  const std::string digest = file_sha256(file);
 
   v1::GetUploadStatusRequest ask;
   ask.set_survey_id(survey_id);
@@ -102,7 +154,7 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
   auto context = o.remote.context();
   v1::UploadStatus reply;
   auto writer = surveys.UploadFile(context.get(), &reply);
-  const std::unique_ptr<ByteSource> in = files.open(file, static_cast<std::uint64_t>(offset));
+  const std::unique_ptr<ByteSource> in = file.open(static_cast<std::uint64_t>(offset));
   v1::UploadFileRequest message;
   message.set_survey_id(survey_id);
   message.set_file_name(name);
@@ -146,14 +198,18 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
 void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
-  const BundleFiles files(o.bundle);
+  const bool gsf = std::all_of(o.inputs.begin(), o.inputs.end(), [](const std::string& p) { return gsf::is_gsf_path(p); });
+  if (!gsf && o.inputs.size() > 1) throw std::runtime_error("several inputs must all be GSF files; a bundle comes alone");
+  if (!gsf && (!o.crs.empty() || !o.reference_nav.empty()))
+    throw std::runtime_error("--crs and --reference-nav are for GSF files; a bundle has survey.json and reference_nav.csv");
+  Declaration declared;
+  const std::vector<LocalFile> files = gsf ? gsf_files(o, declared) : bundle_files(o, declared);
   bool ready = false;
-  const std::int64_t id = find_or_create_survey(*surveys, o, files, ready);
+  const std::int64_t id = find_or_create_survey(*surveys, o, declared, ready);
   if (!ready) {
     std::int64_t budget = o.stop_after_bytes;
-    for (std::string_view file : {kSurveyJsonFile, kNavFile, kPingsFile, kReferenceNavFile}) {
-      if (!files.contains(file)) continue;
-      if (!upload_file(*surveys, o, id, files, file, budget)) throw std::runtime_error("upload interrupted (--stop-after-bytes)");
+    for (const LocalFile& file : files) {
+      if (!upload_file(*surveys, o, id, file, budget)) throw std::runtime_error("upload interrupted (--stop-after-bytes)");
     }
     v1::FinalizeSurveyRequest finalize;
     finalize.set_survey_id(id);
@@ -167,9 +223,14 @@ void run_upload(const UploadOptions& o) {
 
 void add_upload_command(CLI::App& app) {
   auto o = std::make_shared<UploadOptions>();
-  CLI::App* cmd = app.add_subcommand("upload", "Upload a survey bundle (resumes an interrupted upload) and finalize it");
-  cmd->add_option("bundle", o->bundle, "survey bundle: a folder or a .tar of one")->required()->check(CLI::ExistingPath);
-  cmd->add_option("--name", o->name, "survey name (default: survey.json's name)");
+  CLI::App* cmd = app.add_subcommand("upload", "Upload a survey (resumes an interrupted upload) and finalize it");
+  cmd->add_option("survey", o->inputs, "a survey bundle (a folder or a .tar of one), or one or more .gsf files")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--crs", o->crs, "GSF: projected CRS of the map frame (default: the data's UTM zone)");
+  cmd->add_option("--reference-nav", o->reference_nav, "GSF: reference navigation in the nav.csv format")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--name", o->name, "survey name (default: survey.json's name, or the first GSF file's)");
   cmd->add_option("--stop-after-bytes", o->stop_after_bytes, "stop after sending this many bytes, as a cut connection would");
   add_remote_options(cmd, o->remote);
   cmd->callback([o] { run_upload(*o); });

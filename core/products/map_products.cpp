@@ -1,6 +1,7 @@
 #include "core/products/map_products.h"
 
 #include "core/io/file_bytes.h"
+#include "core/tiles/bag_writer.h"
 #include "core/tiles/geotiff_writer.h"
 #include "core/tiles/quicklook.h"
 
@@ -15,6 +16,7 @@ MapFiles write_map_products(const PipelineResult& result, const SurveyMetadata& 
   files.geometry = map.geometry;
   std::filesystem::create_directories(dir);
   write_geotiff(map, survey.crs, dir / "map.tif");
+  write_bag(map, survey.crs, map_bag_metadata(survey.name, to_string(result.config.configuration)), dir / "map.bag");
   files.tiles = write_tile_files(map, survey.crs, dir / "tiles", plan_of(result.config).threads);
   for_each_tile(map, [&](const TileId& id, const GridRaster& tile) {
     files.tile_ids.push_back(id);
@@ -35,7 +37,7 @@ MapFiles write_map_products(const PipelineResult& result, const SurveyMetadata& 
 
 std::string MapFiles::summary() const {
   if (!written) return "no map (no cell has enough soundings)";
-  std::string text = "map.tif, map.png, " + std::to_string(tiles.tiles) + " tiles on " + std::to_string(tiles.levels) + " levels";
+  std::string text = "map.tif, map.bag, map.png, " + std::to_string(tiles.tiles) + " tiles on " + std::to_string(tiles.levels) + " levels";
   for (const std::string& plot : plots) {
     if (plot != "map.png") text += ", " + plot;
   }

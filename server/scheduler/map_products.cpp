@@ -34,6 +34,7 @@ MapProducts make_map_products(const PipelineResult& result, const SurveyMetadata
   if (!files.written) return products;
 
   products.tiles.push_back({{"cog", 0, 0, 0}, file_bytes(dir / "map.tif")});
+  products.tiles.push_back({{"bag", 0, 0, 0}, file_bytes(dir / "map.bag")});
   for (const TileId& id : files.tile_ids) {
     const std::string stem = (dir / "tiles" / tile_stem(id)).string();
     const int col = static_cast<int>(id.col), row = static_cast<int>(id.row);

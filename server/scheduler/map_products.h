@@ -16,7 +16,7 @@
 namespace bathyslam::server {
 
 struct MapProducts {
-  std::vector<std::pair<storage::TileKey, storage::Bytes>> tiles;  // the whole map is format "cog"
+  std::vector<std::pair<storage::TileKey, storage::Bytes>> tiles;  // the whole map is format "cog" and "bag"
   storage::MapGrid grid;
   std::map<std::string, storage::Bytes> plots;  // map.png, map_difference.png
 };

@@ -84,8 +84,9 @@ grpc::Status MapService::GetMapInfo(grpc::ServerContext* call, const v1::GetMapI
     }
     std::map<std::tuple<int, int, int>, v1::TileRef> tiles;
     for (const storage::TileKey& key : context_.results.tiles(job.id)) {
-      if (key.format == "cog") {
-        reply->set_has_map(true);
+      if (key.format == "cog" || key.format == "bag") {  // the whole map, not a tile
+        if (key.format == "cog") reply->set_has_map(true);
+        else reply->set_has_bag(true);
         continue;
       }
       v1::TileRef& ref = tiles[{key.level, key.row, key.col}];
@@ -117,8 +118,9 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
                                 grpc::ServerWriter<v1::DataChunk>* writer) {
   return handle("GetMap", call, [&] {
     const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
-    auto data = context_.results.tile(job.id, {"cog", 0, 0, 0});
-    if (!data) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no map");
+    const std::string format = request->format() == v1::BAG ? "bag" : "cog";
+    auto data = context_.results.tile(job.id, {format, 0, 0, 0});
+    if (!data) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + format + " map");
     stream(call, *data, writer);
   });
 }

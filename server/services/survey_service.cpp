@@ -107,7 +107,7 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     const std::string name = message.file_name();
     owned_survey(context_, tenant, survey_id);
     if (!storage::is_bundle_file(name))
-      throw invalid("file_name", "'" + name + "' is not a bundle file (survey.json, nav.csv, pings.csv, reference_nav.csv)");
+      throw invalid("file_name", "'" + name + "' is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
     if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
     if (message.size_bytes() > context_.limits.max_file_bytes)
       throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +

@@ -234,8 +234,8 @@ std::vector<Eigen::Isometry3d> ResultStore::load_optimized_poses(std::int64_t jo
 }
 
 void ResultStore::put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data) {
-  if (key.format != "geotiff" && key.format != "openvdb" && key.format != "png" && key.format != "cog")
-    throw std::invalid_argument("tile format '" + key.format + "': geotiff, openvdb, png or cog");
+  if (key.format != "geotiff" && key.format != "openvdb" && key.format != "png" && key.format != "cog" && key.format != "bag")
+    throw std::invalid_argument("tile format '" + key.format + "': geotiff, openvdb, png, cog or bag");
   if (key.level < 0) throw std::invalid_argument("tile level must be non-negative");
   auto connection = pool_.acquire();
   connection->exec(

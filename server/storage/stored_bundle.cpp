@@ -1,5 +1,6 @@
 #include "server/storage/stored_bundle.h"
 
+#include "core/io/gsf/gsf_survey.h"
 #include "server/scratch_dir.h"
 
 #include <array>
@@ -16,8 +17,38 @@ constexpr std::array<std::string_view, 4> kBundleFiles = {kSurveyJsonFile, kNavF
 bool is_bundle_file(const std::string& name) {
   for (std::string_view file : kBundleFiles)
     if (file == name) return true;
-  return false;
+  return gsf::is_gsf_file_name(name);
 }
+
+namespace {
+
+// GSF uploads: the .gsf files in the time order of their first pings, reference_nav.csv when
+// uploaded; name, CRS (empty: the data's UTM zone), sonar and vehicle from CreateSurvey. A
+// damaged file is one problem naming the file, record and byte.
+BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (gsf::is_gsf_path(entry.path())) files.push_back(entry.path());
+  gsf::ReadOptions options{record.crs, std::nullopt};
+  if (std::filesystem::exists(dir / kReferenceNavFile)) options.reference_nav = dir / kReferenceNavFile;
+  BundleReadResult result;
+  try {
+    Survey survey = gsf::read_survey(gsf::in_time_order(std::move(files)), options).survey;
+    survey.metadata.name = record.name;
+    if (!record.sonar.empty()) survey.metadata.sonar["declared"] = record.sonar;
+    survey.metadata.vehicle = record.vehicle;
+    result.survey = std::move(survey);
+  } catch (const std::exception& e) {
+    // Paths in the message are the scratch copy's; the file names are the upload's.
+    std::string message = e.what();
+    for (std::string::size_type at; (at = message.find(dir.string() + "/")) != std::string::npos;)
+      message.erase(at, dir.string().size() + 1);
+    result.problems.push_back({Problem::Severity::kError, "", 0, "", message});
+  }
+  return result;
+}
+
+}  // namespace
 
 BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root) {
   server::ScratchDir scratch(scratch_root, "bundle");
@@ -25,6 +56,13 @@ BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, 
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
     std::ofstream out(scratch.path() / upload.name, std::ios::binary);
     store.export_file(survey_id, upload.name, out);
+  }
+  bool gsf_upload = false;
+  for (const UploadState& upload : store.uploads(survey_id)) gsf_upload = gsf_upload || gsf::is_gsf_path(upload.name);
+  if (gsf_upload) {
+    const std::optional<SurveyRecord> record = store.survey(survey_id);
+    if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");
+    return read_gsf_survey(*record, scratch.path());
   }
   BundleReadResult result = read_bundle(scratch.path());
   // The reader names the folder of a missing file; the scratch folder means nothing to a user.

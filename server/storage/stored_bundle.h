@@ -10,11 +10,12 @@
 
 namespace bathyslam::storage {
 
-// The bundle files a survey may hold; others are refused at upload.
+// The files a survey may hold: a bundle's, or GSF files (plain names ending in .gsf) with an
+// optional reference_nav.csv; others are refused at upload.
 bool is_bundle_file(const std::string& name);
 
 // Reads the survey's complete bundle files (missing ones are reported as problems by the
-// reader, with the file name and no scratch path).
+// reader, with the file name and no scratch path), or its GSF files when it has any.
 BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
 
 }  // namespace bathyslam::storage

@@ -59,8 +59,8 @@ PY
 test -s "$work/odo/trajectory.csv" && test -s "$work/odo/consistency_histogram.png"
 
 # The fused map and its tiles: a COG per tile that gdalinfo reads, a .vdb beside it, a quicklook.
-test -s "$work/odo/map.tif" && test -s "$work/odo/map.png"
-grep -qE "^map 0.50 m cells: map.tif, map.png, [0-9]+ tiles on [0-9]+ levels" "$work/odo.txt"
+test -s "$work/odo/map.tif" && test -s "$work/odo/map.bag" && test -s "$work/odo/map.png"
+grep -qE "^map 0.50 m cells: map.tif, map.bag, map.png, [0-9]+ tiles on [0-9]+ levels" "$work/odo.txt"
 tile=$(ls "$work"/odo/tiles/0/*.tif | head -n 1)
 test -s "${tile%.tif}.vdb"
 gdalinfo "$tile" > "$work/gdalinfo.txt"

@@ -56,7 +56,8 @@ done
 "$BATHYSLAM" report "$job" --json | python3 -c 'import json, sys; r = json.load(sys.stdin); assert r["configuration"] == "gicp"'
 "$BATHYSLAM" jobs | grep -Eq "^ +$job +$survey +gicp +succeeded" || fail "jobs: $("$BATHYSLAM" jobs)"
 
-# The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG.
+# The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG
+# and as a BAG.
 "$BATHYSLAM" tiles "$job" --out "$work/tiles" > "$work/tiles.out" || fail "tiles"
 all=$(awk '{print $1}' "$work/tiles.out")
 [ "$all" -gt 1 ] || fail "$(cat "$work/tiles.out")"
@@ -70,7 +71,35 @@ e=$(( ${col_row%_*} * 256 + 128 )) n=$(( ${col_row#*_} * 256 + 128 ))
 [ "$(find "$work/box" -name '*.tif' | wc -l)" -lt "$all" ] || fail "the box fetched every tile"
 "$BATHYSLAM" map "$job" --out "$work/map.tif" > /dev/null || fail "map"
 gdalinfo "$work/map.tif" | grep -q "LAYOUT=COG" || fail "map.tif is not a COG"
+"$BATHYSLAM" map "$job" --format bag --out "$work/map.bag" > /dev/null || fail "map --format bag"
+gdalinfo "$work/map.bag" | grep -q "^Driver: BAG" || fail "map.bag is not a BAG"
+gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the survey's CRS"
+[ "$(gdalinfo "$work/map.bag" | grep '^Size is')" = "$(gdalinfo "$work/map.tif" | grep '^Size is')" ] ||
+  fail "map.bag and map.tif differ in size"
 [ -f "$work/report/map_difference.png" ] || fail "no map difference plot"
+
+# GSF: real files given in the wrong order are put in time order by the server; a truncated
+# one is refused naming its record and byte; a simulated GSF survey with its reference
+# navigation runs as a job.
+"$BATHYSLAM" upload "$GSF_DATA/EX1811_EM302_0059_20181102_212138.gsf" "$GSF_DATA/gsfpy_test_data.gsf" --name real-gsf \
+  > "$work/gsf1" 2> "$work/gsf1.err" || fail "GSF upload: $(cat "$work/gsf1.err")"
+grep -Eq "^survey [0-9]+ ready$" "$work/gsf1" || fail "$(cat "$work/gsf1")"
+head -c 5000 "$GSF_DATA/gsfpy_test_data.gsf" > "$work/cut.gsf"
+if "$BATHYSLAM" upload "$work/cut.gsf" 2> "$work/cut.err"; then fail "a truncated GSF file was accepted"; fi
+grep -q "cut.gsf: record 7 at byte 4000: truncated" "$work/cut.err" || fail "$(cat "$work/cut.err")"
+"$BATHYSLAM" simulate --scenario small --seed 4 --format gsf --out "$work/simgsf" > /dev/null
+"$BATHYSLAM" upload "$work/simgsf/survey.gsf" --reference-nav "$work/simgsf/reference_nav.csv" --name sim-gsf \
+  > "$work/gsf2" 2> "$work/gsf2.err" || fail "GSF upload: $(cat "$work/gsf2.err")"
+gsf_survey=$(awk '/^survey .* ready$/ {print $2}' "$work/gsf2")
+gsf_job=$("$BATHYSLAM" submit "$gsf_survey" --config odometry | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$gsf_job" > "$work/gsf_watch" 2> /dev/null || fail "watch: $(cat "$work/gsf_watch")"
+grep -q "job $gsf_job succeeded" "$work/gsf_watch" || fail "$(cat "$work/gsf_watch")"
+"$BATHYSLAM" report "$gsf_job" --json | /usr/bin/python3 -c '
+import json, sys
+r = json.load(sys.stdin)
+assert r["trajectory_error_m"]["optimized"]["rmse"] > 0, r["trajectory_error_m"]' || fail "GSF job report"
+"$BATHYSLAM" map "$gsf_job" --format bag --out "$work/gsf.bag" > /dev/null || fail "map --format bag of the GSF job"
+gdalinfo "$work/gsf.bag" | grep -q "UTM zone 51N" || fail "the GSF job's BAG is not in the data's UTM zone"
 
 # Tokens: another tenant sees none of this; a wrong token is refused.
 token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)

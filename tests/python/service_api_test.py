@@ -231,6 +231,7 @@ class ServiceApiTest(unittest.TestCase):
         self.assertEqual((info.resolution_m, info.tile_size_cells), (0.5, 512))
         self.assertGreaterEqual(info.levels, 1)
         self.assertTrue(info.has_map)
+        self.assertTrue(info.has_bag)
         self.assertLess(info.min_easting, info.max_easting)
         tile = info.tiles[0]
         self.assertEqual(set(tile.formats), {map_pb2.GEOTIFF, map_pb2.VDB, map_pb2.PNG})
@@ -265,6 +266,8 @@ class ServiceApiTest(unittest.TestCase):
         whole = gdal.Open("/vsimem/map.tif")
         self.assertEqual(whole.GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE"), "COG")
         self.assertAlmostEqual(whole.GetGeoTransform()[0], info.min_easting)
+        bag = fetch(lambda **kw: self.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.BAG), **kw))
+        self.assertEqual(bag[:8], b"\x89HDF\r\n\x1a\n")  # BAG is HDF5
         self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
                          map_pb2.GetTileRequest(job_id=job.id, level=99, col=0, row=0, format=map_pb2.GEOTIFF))
         self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetTile(r, **kw)),

@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <openvdb/openvdb.h>
 
+#include "core/tiles/bag_writer.h"
 #include "core/tiles/geotiff_writer.h"
 #include "core/tiles/quicklook.h"
 #include "core/tiles/tile_files.h"
@@ -52,6 +53,62 @@ class TileFiles : public ::testing::Test {
 
   fs::path dir_;
 };
+
+TEST_F(TileFiles, BagReadsBackWithCrsGeotransformValuesNoDataAndMetadata) {
+  const GridRaster map = sample_map();
+  const fs::path path = dir_ / "map.bag";
+  write_bag(map, "EPSG:32651", {"test grid", "fused by the test", "bathyslam"}, path);
+
+  GDALDataset* ds = GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY);
+  ASSERT_NE(ds, nullptr);
+  EXPECT_STREQ(ds->GetDriver()->GetDescription(), "BAG");
+  EXPECT_EQ(ds->GetRasterXSize(), 600);
+  EXPECT_EQ(ds->GetRasterYSize(), 300);
+  ASSERT_EQ(ds->GetRasterCount(), 2);
+  const OGRSpatialReference* srs = ds->GetSpatialRef();
+  ASSERT_NE(srs, nullptr);
+  OGRSpatialReference utm51n;
+  utm51n.importFromEPSG(32651);
+  EXPECT_TRUE(srs->IsProjected());
+  EXPECT_TRUE(srs->IsSameGeogCS(&utm51n));
+  EXPECT_EQ(srs->GetUTMZone(), 51);
+
+  std::array<double, 6> t{};
+  ASSERT_EQ(ds->GetGeoTransform(t.data()), CE_None);
+  // The same cell edges as the GeoTIFF (BAG stores cell centres; GDAL gives back the edges).
+  EXPECT_NEAR(t[0], 452050.0, 1e-6);
+  EXPECT_NEAR(t[3], 4630150.0, 1e-6);
+  EXPECT_DOUBLE_EQ(t[1], 0.5);
+  EXPECT_DOUBLE_EQ(t[5], -0.5);
+
+  const char* names[] = {"elevation", "uncertainty"};
+  for (int b = 1; b <= 2; ++b) {
+    GDALRasterBand* band = ds->GetRasterBand(b);
+    EXPECT_STREQ(band->GetDescription(), names[b - 1]);
+    int has_nodata = 0;
+    EXPECT_FLOAT_EQ(static_cast<float>(band->GetNoDataValue(&has_nodata)), kBagNoData);
+    EXPECT_TRUE(has_nodata);
+  }
+  auto read = [&](int band, int x, int y) {
+    float v = 0;
+    EXPECT_EQ(ds->GetRasterBand(band)->RasterIO(GF_Read, x, y, 1, 1, &v, 1, 1, GDT_Float32, 0, 0, nullptr), CE_None);
+    return v;
+  };
+  for (const auto& [x, y] : std::array<std::pair<int, int>, 5>{{{0, 0}, {599, 299}, {250, 17}, {7, 200}, {110, 55}}}) {
+    const std::size_t i = static_cast<std::size_t>(y) * 600 + x;
+    const float elevation = read(1, x, y), uncertainty = read(2, x, y);
+    if (std::isnan(map.elevation[i])) EXPECT_EQ(elevation, kBagNoData) << x << "," << y;
+    else EXPECT_FLOAT_EQ(elevation, map.elevation[i]) << x << "," << y;
+    if (std::isnan(map.uncertainty[i])) EXPECT_EQ(uncertainty, kBagNoData) << x << "," << y;
+    else EXPECT_FLOAT_EQ(uncertainty, map.uncertainty[i]) << x << "," << y;
+  }
+  char** xml = ds->GetMetadata("xml:BAG");
+  ASSERT_NE(xml, nullptr);
+  const std::string metadata = xml[0];
+  EXPECT_NE(metadata.find("test grid"), std::string::npos);
+  EXPECT_NE(metadata.find("rawStdDev"), std::string::npos);
+  GDALClose(ds);
+}
 
 TEST_F(TileFiles, GeoTiffReadsBackWithCrsGeotransformValuesNoDataAndCogLayout) {
   const GridRaster map = sample_map();

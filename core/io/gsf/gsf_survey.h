@@ -1,0 +1,82 @@
+#pragma once
+// GSF files as a bathyslam Survey, and a Survey's pings as a GSF file.
+//
+// Reading (README, "GSF in"): every ping header gives a navigation sample (latitude/longitude
+// projected into the survey's CRS, depth corrector as vehicle depth, roll, pitch, heading);
+// every usable beam of a usable ping gives a sounding in the vehicle frame. GSF stores beams
+// in a level frame aligned with the heading (attitude already applied), so the reader takes
+// roll and pitch back out: the georef stage puts them in again, and each sounding lands where
+// the GSF file has it. Ignored pings and rejected beams are counted, not kept.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/io/byte_source.h"
+#include "core/types/survey.h"
+
+namespace bathyslam::gsf {
+
+// What one GSF file held.
+struct FileSummary {
+  std::string file;
+  std::string version;
+  std::uint64_t bytes = 0;
+  std::uint64_t records = 0;
+  std::uint64_t pings = 0;
+  std::uint64_t ignored_pings = 0;   // ping flag bit 0
+  std::uint64_t beams = 0;           // in usable pings
+  std::uint64_t soundings = 0;       // usable beams of usable pings
+  std::uint64_t rejected_beams = 0;  // beam flag bit 0, or without depth/across-track
+  int max_beams_per_ping = 0, min_beams_per_ping = 0;
+  std::uint64_t attitude_records = 0, attitude_samples = 0;
+  std::uint64_t sound_velocity_profiles = 0;
+  std::uint64_t processing_parameter_records = 0;
+  std::uint64_t comments = 0;
+  std::uint64_t skipped_records = 0;  // records bathyslam does not decode
+  double time_begin = 0, time_end = 0;
+  double latitude_min = 0, latitude_max = 0, longitude_min = 0, longitude_max = 0;
+  double depth_min_m = 0, depth_max_m = 0;  // of the soundings
+};
+
+nlohmann::json to_json(const FileSummary& summary);
+std::string to_text(const FileSummary& summary);
+
+struct ReadOptions {
+  std::string crs;  // "EPSG:<code>"; empty: the WGS 84 UTM zone of the first ping
+  std::optional<std::filesystem::path> reference_nav;  // a nav.csv-format file
+};
+
+struct SurveyRead {
+  Survey survey;
+  std::vector<FileSummary> files;
+};
+
+// Reads `files` (in time order) into one survey; throws GsfError for a damaged file,
+// std::runtime_error for pings out of time order or an unusable CRS.
+SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const ReadOptions& options = {});
+
+// `files` ordered by the time of their first ping (files without a ping last, by name), for
+// files whose order nobody gave (a service upload). Reads each file up to its first ping.
+std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files);
+
+// The summary of one file alone, without building a survey (constant memory).
+FileSummary summarize_file(ByteSource& source, const std::string& file);
+
+// Writes the pings of `survey` as GSF with the navigation `nav` (the survey's own, or a
+// corrected one; the CRS is the survey's) interpolated at each ping: the inverse of read_survey.
+// Pings outside `nav`'s span are left out; returns how many were written.
+std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& nav,
+                           const std::filesystem::path& path);
+
+// Whether `path` names a GSF file (by its extension, as the tools that write it name them).
+bool is_gsf_path(const std::filesystem::path& path);
+
+// Whether `name` may name an uploaded GSF file: a plain file name ending in .gsf, of letters,
+// digits, '.', '_' and '-', not starting with '.', at most 200 characters (it becomes a path).
+bool is_gsf_file_name(const std::string& name);
+
+}  // namespace bathyslam::gsf

@@ -1,0 +1,61 @@
+#include "core/tiles/bag_writer.h"
+
+#include <array>
+#include <cmath>
+#include <ctime>
+
+#include <cpl_string.h>
+
+#include "core/tiles/gdal_raster.h"
+
+namespace bathyslam {
+namespace {
+
+// BAG has no NaN: a cell without a value holds the null value.
+std::vector<float> with_bag_nulls(const std::vector<float>& values) {
+  std::vector<float> out(values);
+  for (float& v : out) {
+    if (std::isnan(v)) v = kBagNoData;
+  }
+  return out;
+}
+
+}  // namespace
+
+BagMetadata map_bag_metadata(const std::string& survey_name, const std::string& configuration) {
+  return {"Bathymetry of survey '" + survey_name + "': mean elevation and standard deviation of the soundings per cell",
+          "bathyslam: pings georeferenced by the navigation corrected with the '" + configuration +
+              "' configuration (MCHS-SLAM pose graph), soundings fused per cell (mean, standard deviation)"};
+}
+
+void write_bag(const GridRaster& raster, std::string_view crs, const BagMetadata& metadata,
+               const std::filesystem::path& path) {
+  const std::string what = path.string() + ": cannot write BAG";
+  const std::vector<float> elevation = with_bag_nulls(raster.elevation);
+  const std::vector<float> uncertainty = with_bag_nulls(raster.uncertainty);
+  const std::array<NamedBand, 2> bands{{{"elevation", &elevation}, {"uncertainty", &uncertainty}}};
+  GdalDatasetPtr mem = memory_raster(raster.geometry, crs, bands, kBagNoData, what);
+
+  // The variables of GDAL's BAG metadata template (ISO 19115): who, when, what, how.
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char date[16], datetime[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d", &utc);
+  std::strftime(datetime, sizeof datetime, "%Y-%m-%dT%H:%M:%S", &utc);
+  CPLStringList options;
+  options.SetNameValue("VAR_ORGANISATION_NAME", metadata.organisation.c_str());
+  options.SetNameValue("VAR_INDIVIDUAL_NAME", "bathyslam");
+  options.SetNameValue("VAR_POSITION_NAME", "processing software");
+  options.SetNameValue("VAR_DATE", date);
+  options.SetNameValue("VAR_DATETIME", datetime);
+  options.SetNameValue("VAR_ABSTRACT", metadata.abstract.c_str());
+  options.SetNameValue("VAR_PROCESS_STEP_DESCRIPTION", metadata.process_step.c_str());
+  options.SetNameValue("VAR_VERTICAL_UNCERT_CODE", "rawStdDev");
+  options.SetNameValue("COMPRESS", "DEFLATE");
+  CPLErrorReset();
+  GdalDatasetPtr bag(gdal_driver("BAG")->CreateCopy(path.c_str(), mem.get(), FALSE, options.List(), nullptr, nullptr));
+  if (!bag) throw gdal_error(what, "BAG driver");
+}
+
+}  // namespace bathyslam
