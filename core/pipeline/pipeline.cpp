@@ -37,6 +37,8 @@ void visit_parameters(Config& c, Visit&& visit) {
   visit("register.crop_margin_m", c.registration.crop_margin_m, 0, 100);
   visit("register.feature_refine_correspondence_m", c.registration.feature_refine_correspondence_m, 0, 100);
   visit("gicp.about_centroid", c.registration.gicp.about_centroid, 0, 1);
+  visit("gicp.engine", c.registration.gicp.engine, 0, 1);
+  visit("gicp.min_observed_share", c.registration.gicp.min_observed_share, 0, 1);
   visit("gicp.sigma_x_m", c.gicp_sigma_translation_m.x(), 1e-4, 1e3);
   visit("gicp.sigma_y_m", c.gicp_sigma_translation_m.y(), 1e-4, 1e3);
   visit("gicp.sigma_z_m", c.gicp_sigma_translation_m.z(), 1e-4, 1e3);
@@ -152,11 +154,12 @@ Constraint constraint_of(const TypedPair& typed, const PairRegistration& reg, co
 // `gicp`: direct GICP from dead reckoning, every converged registration kept with the same
 // information, as in the paper's baseline.
 Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, const TypedPair& typed,
-                            const std::vector<Cloud::Ptr>& clouds, const PipelineConfig& config) {
+                            const std::vector<Cloud::Ptr>& clouds, GicpCloudCache& prepared, const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const PairRegistration reg = register_direct(*clouds[pair.target], *clouds[pair.source], guess,
-                                               config.registration.gicp, config.registration.crop_margin_m);
+                                               config.registration.gicp, config.registration.crop_margin_m, false,
+                                               prepared_pair(prepared, config.registration.gicp, pair.target, pair.source));
   Constraint c = constraint_of(typed, reg, guess);
   c.information = information_from_sigmas(config.gicp_sigma_translation_m, config.gicp_sigma_rotation_rad);
   c.accepted = c.quality.converged && c.quality.overlap_points > 0;
@@ -168,7 +171,7 @@ Constraint register_uniform(const std::vector<Eigen::Isometry3d>& estimate, cons
 // `mchs`: the switch picks direct or feature-aided registration; acceptance decides whether the
 // result becomes an edge, and its quality how much the edge weighs.
 Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const TypedPair& typed,
-                         const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
+                         const std::vector<Cloud::Ptr>& clouds, GicpCloudCache& prepared, const std::vector<SubmapFeatures>& features,
                          const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config) {
   const CandidatePair& pair = typed.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
@@ -176,7 +179,8 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
   CoarseToFineConfig registration = config.registration;
   registration.hessian = config.quality.information_from_hessian;  // the information needs it, nothing else does
   const PairRegistration reg = register_coarse_to_fine(*clouds[pair.target], *clouds[pair.source], features[pair.target],
-                                                       features[pair.source], guess, registration, seed);
+                                                       features[pair.source], guess, registration, seed,
+                                                       prepared_pair(prepared, registration.gicp, pair.target, pair.source));
   Constraint c = constraint_of(typed, reg, guess);
   c.reason = rejection_reason(reg, guess, config.acceptance, typed.type == ConstraintType::kLoop);
   c.accepted = c.reason.empty();
@@ -189,7 +193,8 @@ Constraint register_mchs(const std::vector<Eigen::Isometry3d>& estimate, const T
 
 // Registers every pair in parallel from the guesses `estimate` gives; results in pair order.
 std::vector<Constraint> register_pairs(const std::vector<Eigen::Isometry3d>& estimate, const std::vector<TypedPair>& pairs,
-                                       const std::vector<Cloud::Ptr>& clouds, const std::vector<SubmapFeatures>& features,
+                                       const std::vector<Cloud::Ptr>& clouds, GicpCloudCache& prepared,
+                                       const std::vector<SubmapFeatures>& features,
                                        const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                        const PipelineConfig& config, const std::atomic<bool>* cancel) {
   std::vector<Constraint> constraints(pairs.size());
@@ -198,8 +203,8 @@ std::vector<Constraint> register_pairs(const std::vector<Eigen::Isometry3d>& est
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (cancel != nullptr && cancel->load()) continue;
     constraints[k] = config.configuration == Configuration::kMchs
-                         ? register_mchs(estimate, pairs[k], clouds, features, dr, dr_poses, config)
-                         : register_uniform(estimate, pairs[k], clouds, config);
+                         ? register_mchs(estimate, pairs[k], clouds, prepared, features, dr, dr_poses, config)
+                         : register_uniform(estimate, pairs[k], clouds, prepared, config);
   }
   check(cancel);
   return constraints;
@@ -237,13 +242,14 @@ void register_incrementally(PipelineResult& r, const std::vector<Cloud::Ptr>& cl
   std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
   const DrNoiseModel dr(r.dr_poses, config.graph);
   const bool consistency = config.configuration == Configuration::kMchs && config.robustness.consistency;
+  GicpCloudCache prepared(clouds, config.registration.gicp.neighbours);  // our GICP's, once per submap
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
     for (int s = std::max(begin, 1); s < end; ++s) {
       estimate[s] = estimate[s - 1] * (r.dr_poses[s - 1].inverse() * r.dr_poses[s]);
     }
     const std::vector<TypedPair> pairs = candidates_ending_in(r, estimate, begin, end, config);
-    for (Constraint& c : register_pairs(estimate, pairs, clouds, features, dr, r.dr_poses, config, cancel)) {
+    for (Constraint& c : register_pairs(estimate, pairs, clouds, prepared, features, dr, r.dr_poses, config, cancel)) {
       r.constraints.push_back(c);
     }
     if (consistency) select_consistent_registrations(r.constraints, dr, r.dr_poses, config.robustness.consistency_config);
