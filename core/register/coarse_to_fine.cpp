@@ -24,7 +24,7 @@ namespace {
 // register_direct with our GICP: the same crop, as indices into the prepared submaps.
 PairRegistration register_direct_prepared(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& guess,
                                           const GicpConfig& gicp, double crop_margin_m, bool with_hessian) {
-  const GicpOverlap overlap = gicp_overlap(target, source, guess, crop_margin_m);
+  const GicpOverlap overlap = gicp_overlap(target, source, guess, crop_margin_m, gicp.threads);
   PairRegistration r;
   r.coarse = guess;
   r.anchor = source_centroid(source, overlap);
@@ -49,8 +49,8 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
                                  const GicpConfig& gicp, double crop_margin_m, bool with_hessian, PreparedPair prepared) {
   if (gicp.engine == 1) {
     std::shared_ptr<const GicpCloud> own_target, own_source;
-    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp.neighbours, gicp.threads)).get();
-    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp.neighbours, gicp.threads)).get();
+    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp.neighbours)).get();
+    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp.neighbours)).get();
     return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian);
   }
   const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);

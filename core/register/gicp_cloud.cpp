@@ -31,7 +31,7 @@ Eigen::Vector3f plane_normal(const std::vector<Eigen::Vector3f>& points, const u
 
 }  // namespace
 
-std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours, int threads) {
+std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours) {
   auto out = std::make_shared<GicpCloud>();
   out->neighbours = neighbours;
   out->points.reserve(cloud.size());
@@ -41,19 +41,32 @@ std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neig
     out->hi = out->hi.cwiseMax(out->points.back().head<2>());
   }
   out->tree = std::make_unique<PointTree>(out->points);
-  const std::size_t n = out->points.size();
-  out->normals.assign(n, Eigen::Vector3f::Zero());
-  if (neighbours < 3 || n < static_cast<std::size_t>(neighbours)) return out;
+  out->normals.assign(out->points.size(), Eigen::Vector3f::Zero());
+  // Too few points for a neighbourhood: every covariance stays the identity.
+  const bool none = neighbours < 3 || out->points.size() < static_cast<std::size_t>(neighbours);
+  out->has_normal.assign(out->points.size(), none ? 1 : 0);
+  return out;
+}
+
+void GicpCloud::ensure_normals(const std::vector<uint32_t>& indices, int threads) const {
+  const std::lock_guard<std::mutex> lock(normals_mutex);
+  std::vector<uint32_t> missing;
+  for (uint32_t i : indices) {
+    if (!has_normal[i]) {
+      has_normal[i] = 1;  // also dedups repeated indices
+      missing.push_back(i);
+    }
+  }
   const std::size_t k = static_cast<std::size_t>(neighbours);
-  parallel_chunks(n, threads, [&](int, std::size_t begin, std::size_t end) {
+  parallel_chunks(missing.size(), threads, [&](int, std::size_t begin, std::size_t end) {
     std::vector<uint32_t> index(k);
     std::vector<float> sq_distance(k);
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t found = out->tree->nearest_k(out->points[i], k, index.data(), sq_distance.data());
-      out->normals[i] = plane_normal(out->points, index.data(), found);
+    for (std::size_t m = begin; m < end; ++m) {
+      const uint32_t i = missing[m];
+      const std::size_t found = tree->nearest_k(points[i], k, index.data(), sq_distance.data());
+      normals[i] = plane_normal(points, index.data(), found);
     }
   });
-  return out;
 }
 
 GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours)

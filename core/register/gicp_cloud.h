@@ -19,11 +19,19 @@ struct GicpCloud {
   // Each point's covariance is plane-regularised: eigenvalues 1, 1, ε = 1e-3 with the normal
   // (the neighbourhood's least spread direction) taking ε, as in Segal et al. 2009 and PCL's
   // gicp_epsilon. That is I - (1 - ε) n nᵀ, so the unit normal says it all in 12 bytes instead
-  // of a matrix's 36 (zero: too few neighbours, identity covariance).
-  std::vector<Eigen::Vector3f> normals;
+  // of a matrix's 36 (zero: too few neighbours, identity covariance). Computed on first use
+  // (ensure_normals): a submap's pairs overlap only parts of it, and the k-nearest-neighbour
+  // searches cost more than the tree.
+  mutable std::vector<Eigen::Vector3f> normals;
+  mutable std::vector<uint8_t> has_normal;
+  mutable std::mutex normals_mutex;  // pairs registered in parallel may share the submap
   std::unique_ptr<PointTree> tree;
   Eigen::Vector2f lo = Eigen::Vector2f::Constant(INFINITY), hi = Eigen::Vector2f::Constant(-INFINITY);  // x, y
   int neighbours = 0;  // the k the covariances were computed with
+
+  // Computes the normals of `indices` not computed yet, on `threads` threads. Normals once
+  // computed never change, so a pair may read its own while another pair fills others.
+  void ensure_normals(const std::vector<uint32_t>& indices, int threads = 1) const;
 
   static constexpr double kPlaneEpsilon = 1e-3;
   Eigen::Matrix3d covariance(std::size_t i) const {
@@ -32,9 +40,10 @@ struct GicpCloud {
   }
 };
 
-// Covariances from `neighbours` nearest points (the point itself included, as PCL counts them),
-// computed on `threads` threads. A cloud with fewer points than that gets identity covariances.
-std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours, int threads = 1);
+// Points and tree now; normals from `neighbours` nearest points (the point itself included, as
+// PCL counts them) when ensure_normals asks. A cloud with fewer points than that gets identity
+// covariances.
+std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours);
 
 // Each submap's GicpCloud, built on first use (thread-safe: pairs registered in parallel may ask
 // for the same submap) and kept for the rest of the run.

@@ -28,16 +28,20 @@ void in_box(const GicpCloud& cloud, const GicpCloud& other, const Eigen::Isometr
 }  // namespace
 
 GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
-                         double margin_m) {
+                         double margin_m, int threads) {
   GicpOverlap o;
   in_box(source, target, source_to_target, margin_m, [&](std::size_t i, bool inside) {
     if (inside) o.source_points.push_back(static_cast<uint32_t>(i));
   });
   o.target_allowed.assign(target.points.size(), 0);
+  std::vector<uint32_t> target_points;
   in_box(target, source, source_to_target.inverse(), margin_m, [&](std::size_t i, bool inside) {
     o.target_allowed[i] = inside;
-    o.target_points += inside;
+    if (inside) target_points.push_back(static_cast<uint32_t>(i));
   });
+  o.target_points = target_points.size();
+  source.ensure_normals(o.source_points, threads);
+  target.ensure_normals(target_points, threads);
   return o;
 }
 

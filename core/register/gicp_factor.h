@@ -24,9 +24,10 @@ struct GicpOverlap {
   std::size_t target_points = 0;        // how many are allowed
 };
 
-// The same crop as crop_to_overlap (gicp.h) on both clouds, as indices and a mask.
+// The same crop as crop_to_overlap (gicp.h) on both clouds, as indices and a mask, with the
+// normals of every point in it computed (GicpCloud::ensure_normals).
 GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
-                         double margin_m);
+                         double margin_m, int threads = 1);
 
 // One source point of the overlap and its nearest allowed target point within the gate.
 struct GicpCorrespondence {

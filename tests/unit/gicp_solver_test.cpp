@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numeric>
 #include <random>
 
 #include "core/candidates/candidates.h"
@@ -137,7 +138,7 @@ TEST(OwnGicp, HessianIsTheCostsOnTheSameCorrespondences) {
 
 TEST(OwnGicp, OneOrTwoThreadsGiveTheSameNormalEquations) {
   const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(5, 14));
-  const auto target = prepare_gicp_cloud(*p.target, 20, 2), source = prepare_gicp_cloud(*p.source, 20, 1);
+  const auto target = prepare_gicp_cloud(*p.target, 20), source = prepare_gicp_cloud(*p.source, 20);
   const GicpOverlap overlap = gicp_overlap(*target, *source, off(p.truth), 1.0);
   const GicpLinearisation one = linearise_gicp(*target, *source, overlap, off(p.truth), Eigen::Vector3d::Zero(), 3.0, 1);
   const GicpLinearisation two = linearise_gicp(*target, *source, overlap, off(p.truth), Eigen::Vector3d::Zero(), 3.0, 2);
@@ -156,6 +157,9 @@ TEST(OwnGicp, CovariancesAreFlatAlongATiltedPlane) {
     }
   }
   const auto prepared = prepare_gicp_cloud(plane, 20);
+  std::vector<uint32_t> all(plane.size());
+  std::iota(all.begin(), all.end(), 0u);
+  prepared->ensure_normals(all, 2);
   for (std::size_t i = 0; i < plane.size(); i += 97) {
     const Eigen::Matrix3d c = prepared->covariance(i);
     EXPECT_NEAR(normal.dot(c * normal), 1e-3, 1e-5);
