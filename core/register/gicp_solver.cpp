@@ -10,7 +10,7 @@ namespace {
 // The inner Gauss–Newton iterations over one association stop when a step changes the answer
 // by less than this share of the pass's own rule, or after this many.
 constexpr double kInnerShare = 0.1;
-constexpr int kMaxInnerIterations = 5;
+constexpr int kMaxInnerIterations = 2;
 constexpr double kFloatResolutionM = 1e-5;
 
 // x' = exp(δθ)(x - c) + c + δt: the perturbation the factors are linearised for.
