@@ -21,13 +21,13 @@ TEST(Parameters, SetByNameReachesTheStageConfig) {
   EXPECT_EQ(all.at("gicp.max_correspondence_m"), 3.0);  // Table 1 default untouched
 }
 
-TEST(Parameters, GicpEngineIsPclUnlessAskedForOurs) {
+TEST(Parameters, GicpEngineIsOursUnlessAskedForPcl) {
   PipelineConfig config;
-  EXPECT_EQ(parameters(config).at("gicp.engine"), 0.0);
-  set_parameter(config, "gicp.engine=1");
-  EXPECT_EQ(config.registration.gicp.engine, 1);
+  EXPECT_EQ(parameters(config).at("gicp.engine"), 1.0);
+  set_parameter(config, "gicp.engine=0");
+  EXPECT_EQ(config.registration.gicp.engine, 0);
   EXPECT_THROW(set_parameter(config, "gicp.engine=2"), std::invalid_argument);
-  EXPECT_EQ(config.registration.gicp.engine, 1);
+  EXPECT_EQ(config.registration.gicp.engine, 0);
 }
 
 TEST(Parameters, BadNamesAndValuesAreRejectedByName) {
