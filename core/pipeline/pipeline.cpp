@@ -121,7 +121,8 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
 
     report("register", 0);
     const DrNoiseModel dr(r.dr_poses, config.graph);
-    register_incrementally(r, {clouds, features, r.dr_poses, dr}, config, plan, progress, cancel);
+    GicpCloudCache prepared(clouds, config.registration.gicp.neighbours);  // built on first use
+    register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
     clock.done("register");
   }
 

@@ -43,15 +43,17 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
   const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
   const Cloud& target = *in.clouds[pair.target];
   const Cloud& source = *in.clouds[pair.source];
+  const PreparedPair prepared = prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source);
   PairRegistration reg;
   if (plan.features) {
     // RANSAC reproducible per pair, whatever thread or batch registers it.
     const uint64_t seed = config.registration.ransac.seed ^
                           (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
     reg = register_coarse_to_fine(target, source, in.features[pair.target], in.features[pair.source], guess,
-                                  config.registration, seed, with_hessian);
+                                  config.registration, seed, with_hessian, prepared);
   } else {
-    reg = register_direct(target, source, guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian);
+    reg = register_direct(target, source, guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian,
+                          prepared);
   }
   Constraint c = constraint_of(candidate, reg, guess);
   if (plan.quality_aware) {

@@ -18,10 +18,12 @@ struct Candidate {
   ConstraintType type = ConstraintType::kAdjacent;
 };
 
-// What registration reads besides the pairs: per submap its filtered cloud and (with
-// plan.features) its features, and dead reckoning for the DR gate.
+// What registration reads besides the pairs: per submap its filtered cloud, prepared once for
+// our GICP when it registers (gicp.engine 1), and (with plan.features) its features; dead
+// reckoning for the DR gate.
 struct RegistrationInputs {
   const std::vector<Cloud::Ptr>& clouds;
+  GicpCloudCache& prepared;
   const std::vector<SubmapFeatures>& features;
   const std::vector<Eigen::Isometry3d>& dr_poses;
   const DrNoiseModel& dr;

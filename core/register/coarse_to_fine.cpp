@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "core/register/gicp_solver.h"
 #include "core/types/format.h"
 
 namespace bathyslam {
@@ -27,8 +28,40 @@ RegistrationPath parse_registration_path(const std::string& text) {
   throw std::invalid_argument("registration path '" + text + "' is not known to this version of the core");
 }
 
+namespace {
+
+// register_direct with our GICP: the same crop, as indices into the prepared submaps.
+PairRegistration register_direct_prepared(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& guess,
+                                          const GicpConfig& gicp, double crop_margin_m, bool with_hessian) {
+  const GicpOverlap overlap = gicp_overlap(target, source, guess, crop_margin_m, gicp.threads);
+  PairRegistration r;
+  r.coarse = guess;
+  r.anchor = source_centroid(source, overlap);
+  r.registration.source_to_target = guess;
+  const auto too_few = static_cast<std::size_t>(gicp.neighbours + 1);
+  if (overlap.target_points < too_few || overlap.source_points.size() < too_few) return r;
+  PreparedRegistration reg = register_prepared(target, source, overlap, guess, gicp, with_hessian ? &r.anchor : nullptr);
+  r.registration = reg.registration;
+  r.inlier_ratio = r.registration.quality.fitness;
+  r.hessian = reg.hessian;
+  return r;
+}
+
+}  // namespace
+
+PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source) {
+  if (gicp.engine != 1) return {};
+  return {&cache.at(static_cast<std::size_t>(target)), &cache.at(static_cast<std::size_t>(source))};
+}
+
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian) {
+                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian, PreparedPair prepared) {
+  if (gicp.engine == 1) {
+    std::shared_ptr<const GicpCloud> own_target, own_source;
+    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp.neighbours)).get();
+    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp.neighbours)).get();
+    return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian);
+  }
   const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);
   const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);
   PairRegistration r;
@@ -44,28 +77,23 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
   return r;
 }
 
-PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
-                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian) {
-  const double density = feature_density(target_features, source_features);
-  auto direct = [&](std::string why) {
-    PairRegistration r = register_direct(target, source, guess, config.gicp, config.crop_margin_m, with_hessian);
-    r.path = RegistrationPath::kDirect;
-    r.why = std::move(why);
-    r.feature_density = density;
-    r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
-    return r;
-  };
-  if (density < config.switching.min_feature_density) {
-    return direct(format("feature density %.4f < %.4f", density, config.switching.min_feature_density));
+CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeatures& source_features,
+                         const Eigen::Isometry3d& guess, const CoarseToFineConfig& config, uint64_t seed) {
+  CoarseStart c;
+  c.feature_density = feature_density(target_features, source_features);
+  c.start = guess;
+  c.gicp = config.gicp;
+  if (c.feature_density < config.switching.min_feature_density) {
+    c.why = format("feature density %.4f < %.4f", c.feature_density, config.switching.min_feature_density);
+    return c;
   }
   const std::vector<FeatureMatch> matches =
       match_features(source_features.keypoints, target_features.keypoints, guess, config.matching);
-  if (static_cast<int>(matches.size()) < config.matching.min_matches) {
-    PairRegistration r = direct(format("too few matches %.0f < %.0f", static_cast<double>(matches.size()),
-                                       static_cast<double>(config.matching.min_matches)));
-    r.matches = static_cast<int>(matches.size());
-    return r;
+  c.matches = static_cast<int>(matches.size());
+  if (c.matches < config.matching.min_matches) {
+    c.why = format("too few matches %.0f < %.0f", static_cast<double>(matches.size()),
+                   static_cast<double>(config.matching.min_matches));
+    return c;
   }
   std::vector<Eigen::Vector3d> from, to;
   for (const FeatureMatch& m : matches) {
@@ -77,23 +105,38 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
   const RansacResult coarse = adaptive_ransac(from, to, ransac);
 
   // GICP refines the feature estimate on the overlap that estimate predicts.
-  GicpConfig refine = config.gicp;
-  if (config.feature_refine_correspondence_m > 0) {
-    refine.about_centroid = 1;
-    refine.refine_correspondence_m = config.feature_refine_correspondence_m;
-  }
-  PairRegistration r =
-      register_direct(target, source, coarse.source_to_target, refine, config.crop_margin_m, with_hessian);
-  r.path = RegistrationPath::kFeatureAided;
-  r.why = format("feature density %.4f >= %.4f", density, config.switching.min_feature_density) + ", " +
+  c.path = RegistrationPath::kFeatureAided;
+  c.why = format("feature density %.4f >= %.4f", c.feature_density, config.switching.min_feature_density) + ", " +
           std::to_string(matches.size()) + " matches";
-  r.feature_density = density;
-  r.matches = static_cast<int>(matches.size());
-  r.ransac_inliers = static_cast<int>(coarse.inliers.size());
-  r.competitor_inliers = coarse.competitor_inliers;
-  r.competitor_separation_m = coarse.competitor_separation_m;
+  c.start = coarse.source_to_target;
+  if (config.feature_refine_correspondence_m > 0) {
+    c.gicp.about_centroid = 1;
+    c.gicp.refine_correspondence_m = config.feature_refine_correspondence_m;
+  }
+  c.ransac_inliers = static_cast<int>(coarse.inliers.size());
+  c.ransac_inlier_ratio = coarse.inlier_ratio;
+  c.competitor_inliers = coarse.competitor_inliers;
+  c.competitor_separation_m = coarse.competitor_separation_m;
+  return c;
+}
+
+PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian,
+                                         PreparedPair prepared) {
+  const CoarseStart c = coarse_start(target_features, source_features, guess, config, seed);
+  PairRegistration r = register_direct(target, source, c.start, c.gicp, config.crop_margin_m, with_hessian, prepared);
+  r.path = c.path;
+  r.why = c.why;
+  r.feature_density = c.feature_density;
+  r.matches = c.matches;
+  if (c.path == RegistrationPath::kFeatureAided) {
+    r.ransac_inliers = c.ransac_inliers;
+    r.competitor_inliers = c.competitor_inliers;
+    r.competitor_separation_m = c.competitor_separation_m;
+    r.inlier_ratio = c.ransac_inlier_ratio;
+  }
   r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
-  r.inlier_ratio = coarse.inlier_ratio;
   return r;
 }
 

@@ -9,6 +9,7 @@
 #include "core/matching/adaptive_ransac.h"
 #include "core/matching/feature_matching.h"
 #include "core/register/gicp.h"
+#include "core/register/gicp_cloud.h"
 #include "core/register/uniqueness.h"
 #include "core/register/registration_information.h"
 #include "core/submaps/submap.h"
@@ -26,6 +27,7 @@ SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, co
 
 struct SwitchConfig {
   double min_feature_density = 0.005;  // Table 1 (a): keypoints per valid cell of the pair
+
   template <typename Field>
   void fields(Field&& field) {
     field("min_feature_density", min_feature_density, 0, 1);
@@ -86,17 +88,45 @@ struct PairRegistration {
   GicpHessian hessian;
 };
 
+// The two submaps prepared for our GICP (GicpConfig::engine 1), from a GicpCloudCache; null:
+// prepared on the fly from the clouds (costs what the cache saves). PCL's GICP ignores them.
+struct PreparedPair {
+  const GicpCloud* target = nullptr;
+  const GicpCloud* source = nullptr;
+};
+
+// The coarse half: the switch's decision and, on the feature-aided path, RANSAC's estimate, so
+// where GICP starts and with which settings. No GICP runs here.
+struct CoarseStart {
+  RegistrationPath path = RegistrationPath::kDirect;
+  std::string why;
+  double feature_density = 0;
+  int matches = 0;  // also on the direct path when too few
+  int ransac_inliers = 0, competitor_inliers = 0;  // feature-aided path only
+  double competitor_separation_m = 0, ransac_inlier_ratio = 0;
+  Eigen::Isometry3d start = Eigen::Isometry3d::Identity();  // the guess on the direct path
+  GicpConfig gicp;  // Table 1's, or the feature-aided refinement's
+};
+
+CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeatures& source_features,
+                         const Eigen::Isometry3d& guess, const CoarseToFineConfig& config, uint64_t seed);
+
+// The pair's submaps from `cache` when our GICP registers (gicp.engine 1), none for PCL's.
+PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source);
+
 // `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC reproducible per pair.
 // `with_hessian`: also the GICP cost's Hessian at the result (PairRegistration::hessian), for
-// quality.information_from_hessian; it costs about as much again as the registration (one more
-// pass of KD-trees and covariances), so only the information that needs it asks.
+// quality.information_from_hessian; it costs about as much again as the registration, so only
+// the information that needs it asks.
 PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false);
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false,
+                                         PreparedPair prepared = {});
 
 // Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid and, if
 // `with_hessian`, the cost's Hessian there.
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian = false);
+                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian = false,
+                                 PreparedPair prepared = {});
 
 }  // namespace bathyslam

@@ -25,6 +25,20 @@ struct GicpConfig {  // Table 1 (c)
   bool about_centroid = false;
   double refine_correspondence_m = 0.0;  // 0: no second pass
   double refine_convergence = 1e-6;
+  // Which GICP registers: 0 PCL's GeneralizedIterativeClosestPoint (the reference), 1 ours
+  // (gicp_solver.h) on submaps prepared once (gicp_cloud.h), same parameters and rule. PCL's by
+  // default until ours has passed the robustness matrix and both drift models (README,
+  // Benchmarks, "Our GICP").
+  int engine = 0;
+  // Ours only: directions (rotations in metres at the overlap) that the terrain observes less
+  // than this share of the best-observed one keep the guess's value instead of sliding on the
+  // plane covariances' pull along the seabed (gicp_solver.cpp, observed_step). On `lake` the
+  // flattest direct pairs show ~1e-4, textured ones 2e-3 and more (README, "Our GICP").
+  double min_observed_share = 0.0005;
+  // Threads inside one registration (ours only). The pipeline registers pairs in parallel
+  // instead, so 1 there; the benchmark measures both.
+  int threads = 1;
+
   template <typename Field>
   void fields(Field&& field) {
     field("max_correspondence_m", max_correspondence_m, 0.01, 100);
@@ -34,6 +48,9 @@ struct GicpConfig {  // Table 1 (c)
     field("about_centroid", about_centroid, 0, 1);
     field("refine_correspondence_m", refine_correspondence_m, 0, 100);
     field("refine_convergence", refine_convergence, 1e-12, 1);
+    field("engine", engine, 0, 1);
+    field("min_observed_share", min_observed_share, 0, 1);
+    field("threads", threads, 1, 1024);
   }
 };
 

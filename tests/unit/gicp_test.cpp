@@ -18,28 +18,11 @@ double angle_deg(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.rotati
 TEST(Gicp, RecoversAKnownOffsetBetweenAdjacentLineSubmaps) {
   const SubmapSet& set = true_submaps();
   const std::vector<Eigen::Isometry3d> poses = poses_of(set);
-  const auto pairs = adjacent_line_candidates(set, poses);
-  ASSERT_FALSE(pairs.empty());
   // The well-overlapping pair on the roughest ground: GICP cannot see a horizontal offset on a
   // flat bottom (that is what the feature-aided path and the quality weights are for).
-  auto relief = [&](int i) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (const Eigen::Vector3f& p : set.submaps[i].points) {
-      lo = std::min<double>(lo, p.z());
-      hi = std::max<double>(hi, p.z());
-    }
-    return hi - lo;
-  };
-  CandidatePair pair;
-  double best = -1;
-  for (const CandidatePair& p : pairs) {
-    const double r = std::min(relief(p.target), relief(p.source));
-    if (p.overlap_fraction > 0.3 && r > best) {
-      best = r;
-      pair = p;
-    }
-  }
-  ASSERT_GT(best, 0);
+  const std::optional<CandidatePair> found = roughest_adjacent_pair(set);
+  ASSERT_TRUE(found);
+  const CandidatePair pair = *found;
   const Eigen::Isometry3d truth = poses[pair.target].inverse() * poses[pair.source];
   // The guess is off by 2 m, 1.5 m and 3 degrees of yaw.
   Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();

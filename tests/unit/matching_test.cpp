@@ -10,17 +10,10 @@
 namespace bathyslam {
 namespace {
 
-Eigen::Isometry3d pose(double x, double y, double yaw_deg) {
-  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-  p.translation() = Eigen::Vector3d(x, y, 0);
-  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  return p;
-}
-
 double angle_deg(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.rotation()).angle() * 180 / M_PI; }
 
 TEST(AdaptiveRansac, RecoversAKnownTransformFromMatchesThatAre60PercentOutliers) {
-  const Eigen::Isometry3d truth = pose(3.2, -7.5, 12.0);
+  const Eigen::Isometry3d truth = planar_pose(3.2, -7.5, 12.0);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> where(-25, 25), depth(8, 12);
   std::normal_distribution<double> noise(0, 0.05);
@@ -63,8 +56,8 @@ PairClouds pair_of(const SyntheticTerrain& target_terrain, const SyntheticTerrai
 // shifted by one wavelength. The competitor is that second solution, with about half the
 // support; with random outliers instead, no distinct solution has more than chance support.
 TEST(AdaptiveRansac, ReportsAnAliasedSecondSolutionAndNoneWhereThereIsNone) {
-  const Eigen::Isometry3d truth = pose(3.2, -7.5, 12.0);
-  const Eigen::Isometry3d alias = pose(8.0, 0.0, 0.0) * truth;
+  const Eigen::Isometry3d truth = planar_pose(3.2, -7.5, 12.0);
+  const Eigen::Isometry3d alias = planar_pose(8.0, 0.0, 0.0) * truth;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> where(-25, 25), depth(8, 12);
   std::normal_distribution<double> noise(0, 0.05);
@@ -117,8 +110,8 @@ TEST(Acceptance, APairWithACompetingAlignmentOfHalfTheSupportIsAmbiguous) {
 }
 
 TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
-  const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
-  const Eigen::Isometry3d guess = pose(7.5, 2.8, 10.0) * Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0));
+  const Eigen::Isometry3d truth = planar_pose(6.0, 4.0, 8.0);
+  const Eigen::Isometry3d guess = planar_pose(7.5, 2.8, 10.0) * Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0));
   const CoarseToFineConfig config;
 
   const SyntheticTerrain flat = SyntheticTerrain::flat();
@@ -143,7 +136,7 @@ TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
 TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
   // Same kind of ground, different mounds: dead reckoning claims they overlap.
   const SyntheticTerrain here = SyntheticTerrain::with_mounds(31), there = SyntheticTerrain::with_mounds(32);
-  const Eigen::Isometry3d claimed = pose(6.0, 4.0, 8.0);
+  const Eigen::Isometry3d claimed = planar_pose(6.0, 4.0, 8.0);
   const PairClouds p = pair_of(here, there, claimed);
   const CoarseToFineConfig config;
   const PairRegistration r = register_coarse_to_fine(*p.target, *p.source, p.target_features, p.source_features,
@@ -153,11 +146,11 @@ TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
 
 TEST(DirectRegistration, ASliverOfOverlapIsRefusedNotRegistered) {
   const SyntheticTerrain rough = SyntheticTerrain::with_mounds(41);
-  const PairClouds p = pair_of(rough, rough, pose(0, 0, 0));
+  const PairClouds p = pair_of(rough, rough, planar_pose(0, 0, 0));
   // Dead reckoning puts the source 39.5 m east: a strip of a few points overlaps.
-  const PairRegistration r = register_direct(*p.target, *p.source, pose(39.9, 0, 0), GicpConfig{}, 0.0);
+  const PairRegistration r = register_direct(*p.target, *p.source, planar_pose(39.9, 0, 0), GicpConfig{}, 0.0);
   EXPECT_FALSE(r.registration.quality.converged);
-  EXPECT_EQ(rejection_of(r, pose(39.9, 0, 0), {}, false).kind, RejectionKind::kNoOverlap);
+  EXPECT_EQ(rejection_of(r, planar_pose(39.9, 0, 0), {}, false).kind, RejectionKind::kNoOverlap);
 }
 
 TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
@@ -229,7 +222,7 @@ TEST(QualityWeights, FromTheHessianADirectEdgeKeepsWhatItsOverlapObserved) {
   config.information_from_hessian = 1;
   config.direct_horizontal_share = 1.0;
   const Information6 best = information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
-  const Eigen::Isometry3d truth = pose(6.0, 4.0, 8.0);
+  const Eigen::Isometry3d truth = planar_pose(6.0, 4.0, 8.0);
   auto shares = [&](const SyntheticTerrain& terrain) {
     const PairClouds p = pair_of(terrain, terrain, truth);
     const PairRegistration r = register_direct(*p.target, *p.source, truth, GicpConfig{}, 1.0, true);

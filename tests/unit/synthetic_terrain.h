@@ -10,6 +10,14 @@
 
 namespace bathyslam {
 
+// A pose at (x, y) turned `yaw_deg` about z: how the tests place submap frames on the terrain.
+inline Eigen::Isometry3d planar_pose(double x, double y, double yaw_deg) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.translation() = Eigen::Vector3d(x, y, 0);
+  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return p;
+}
+
 struct SyntheticTerrain {
   std::vector<Eigen::Vector2d> mounds;  // world (x, y)
   std::vector<double> heights, stretch, angle;

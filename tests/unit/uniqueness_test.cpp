@@ -10,13 +10,6 @@
 namespace bathyslam {
 namespace {
 
-Eigen::Isometry3d pose(double x, double y, double yaw_deg) {
-  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-  p.translation() = Eigen::Vector3d(x, y, 0);
-  p.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  return p;
-}
-
 // Soundings every 0.25 m over a 40 x 40 m square of `elevation` (up, world frame), in the
 // submap frame at `frame` (z down), with 2 cm noise.
 template <typename Elevation>
@@ -36,7 +29,7 @@ TerrainGrid grid_of(const Elevation& elevation, const Eigen::Isometry3d& frame, 
 // Two submaps that overlap by 30 m in x, the second turned and shifted; probed at the truth.
 template <typename Elevation>
 Uniqueness probe_at_truth(const Elevation& elevation) {
-  const Eigen::Isometry3d target_frame = pose(0, 0, 0), source_frame = pose(10, 2, 7);
+  const Eigen::Isometry3d target_frame = planar_pose(0, 0, 0), source_frame = planar_pose(10, 2, 7);
   const TerrainGrid target = grid_of(elevation, target_frame, 0, 1), source = grid_of(elevation, source_frame, 10, 2);
   return probe_uniqueness(target, source, target_frame.inverse() * source_frame);
 }

@@ -1,0 +1,80 @@
+#include "core/register/gicp_cloud.h"
+
+#include <Eigen/Eigenvalues>
+
+#include "core/register/parallel_chunks.h"
+
+namespace bathyslam {
+namespace {
+
+// The unit normal of a neighbourhood. Mean and scatter in double about the first neighbour: float sums of squares of coordinates
+// tens of metres from the origin would lose the centimetre structure that sets the normal.
+Eigen::Vector3f plane_normal(const std::vector<Eigen::Vector3f>& points, const uint32_t* index, std::size_t found) {
+  if (found < 3) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3d origin = points[index[0]].cast<double>();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 0; k < found; ++k) {
+    const Eigen::Vector3d d = points[index[k]].cast<double>() - origin;
+    sum += d;
+    sum_sq += d * d.transpose();
+  }
+  const double n = static_cast<double>(found);
+  const Eigen::Matrix3d scatter = sum_sq / n - (sum / n) * (sum / n).transpose();
+  // The closed form for 3x3 (several times faster than the iterative solver): only the normal,
+  // the least spread direction, keeps its eigenvalue, and on a sounding neighbourhood it is well
+  // apart from the other two.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(scatter);
+  return eigen.eigenvectors().col(0).normalized().cast<float>();  // ascending: the normal first
+}
+
+}  // namespace
+
+std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours) {
+  auto out = std::make_shared<GicpCloud>();
+  out->neighbours = neighbours;
+  out->points.reserve(cloud.size());
+  for (const pcl::PointXYZ& p : cloud) {
+    out->points.push_back(p.getVector3fMap());
+    out->lo = out->lo.cwiseMin(out->points.back().head<2>());
+    out->hi = out->hi.cwiseMax(out->points.back().head<2>());
+  }
+  out->tree = std::make_unique<PointTree>(out->points);
+  out->normals.assign(out->points.size(), Eigen::Vector3f::Zero());
+  // Too few points for a neighbourhood: every covariance stays the identity.
+  const bool none = neighbours < 3 || out->points.size() < static_cast<std::size_t>(neighbours);
+  out->has_normal.assign(out->points.size(), none ? 1 : 0);
+  return out;
+}
+
+void GicpCloud::ensure_normals(const std::vector<uint32_t>& indices, int threads) const {
+  const std::lock_guard<std::mutex> lock(normals_mutex);
+  std::vector<uint32_t> missing;
+  for (uint32_t i : indices) {
+    if (!has_normal[i]) {
+      has_normal[i] = 1;  // also dedups repeated indices
+      missing.push_back(i);
+    }
+  }
+  const std::size_t k = static_cast<std::size_t>(neighbours);
+  parallel_chunks(missing.size(), threads, [&](int, std::size_t begin, std::size_t end) {
+    std::vector<uint32_t> index(k);
+    std::vector<float> sq_distance(k);
+    for (std::size_t m = begin; m < end; ++m) {
+      const uint32_t i = missing[m];
+      const std::size_t found = tree->nearest_k(points[i], k, index.data(), sq_distance.data());
+      normals[i] = plane_normal(points, index.data(), found);
+    }
+  });
+}
+
+GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours)
+    : clouds_(clouds), neighbours_(neighbours), built_(clouds.size()), prepared_(clouds.size()) {}
+
+const GicpCloud& GicpCloudCache::at(std::size_t submap) {
+  std::call_once(built_.at(submap), [&] { prepared_[submap] = prepare_gicp_cloud(*clouds_[submap], neighbours_); });
+  return *prepared_[submap];
+}
+
+}  // namespace bathyslam

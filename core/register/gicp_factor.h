@@ -1,0 +1,66 @@
+#pragma once
+// register (own GICP), factors: the GICP cost of one pair at a pose, linearised. Each source
+// point of the overlap finds its nearest target point within the gate (KD-tree of the whole
+// target, masked to its overlap); the pair contributes dᵀ M d with d = T p - q and
+// M = (C_q + R C_p Rᵀ)⁻¹ (Segal et al. 2009), and the normal equations Σ Jᵀ M J, Σ Jᵀ M d for
+// a perturbation about a pivot, all summed in double over threads with one reduction.
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "core/register/gicp_cloud.h"
+
+namespace bathyslam {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// What registers: the source's points in the predicted overlap, and which target points are in it.
+struct GicpOverlap {
+  std::vector<uint32_t> source_points;
+  std::vector<uint8_t> target_allowed;  // one per target point
+  std::size_t target_points = 0;        // how many are allowed
+};
+
+// The same crop as crop_to_overlap (gicp.h) on both clouds, as indices and a mask, with the
+// normals of every point in it computed (GicpCloud::ensure_normals).
+GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
+                         double margin_m, int threads = 1);
+
+// One source point of the overlap and its nearest allowed target point within the gate.
+struct GicpCorrespondence {
+  uint32_t source = 0, target = 0;
+};
+
+// Every overlap source point's correspondence at `source_to_target`, in overlap order.
+std::vector<GicpCorrespondence> associate_gicp(const GicpCloud& target, const GicpCloud& source,
+                                               const GicpOverlap& overlap, const Eigen::Isometry3d& source_to_target,
+                                               double max_distance_m, int threads);
+
+struct GicpLinearisation {
+  // For x' = exp(δθ)(x - c) + c + δt of every moved source point x (target frame, pivot c):
+  // ∂x'/∂(δt, δθ) = [I, -[x - c]×].
+  Matrix6d hessian = Matrix6d::Zero();    // Σ Jᵀ M J
+  Vector6d gradient = Vector6d::Zero();   // Σ Jᵀ M d
+  Matrix6d regularisation = Matrix6d::Zero();  // Σ Jᵀ (½ I) J, only if asked for
+  double cost = 0;                        // ½ Σ dᵀ M d
+  double sq_distance_sum = 0;             // Σ |d|² (Euclidean, for the overlap MSE)
+  std::size_t correspondences = 0;
+
+  GicpLinearisation& operator+=(const GicpLinearisation& other);
+};
+
+// Linearises the cost of fixed correspondences at `source_to_target` about `pivot` (target frame).
+GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& source,
+                                 const std::vector<GicpCorrespondence>& correspondences,
+                                 const Eigen::Isometry3d& source_to_target, const Eigen::Vector3d& pivot, int threads,
+                                 bool with_regularisation = false);
+
+// Both at once: the correspondences at `source_to_target` within `max_distance_m`, linearised there.
+GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                                 const Eigen::Isometry3d& source_to_target, const Eigen::Vector3d& pivot,
+                                 double max_distance_m, int threads, bool with_regularisation = false);
+
+}  // namespace bathyslam

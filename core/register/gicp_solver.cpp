@@ -1,0 +1,174 @@
+#include "core/register/gicp_solver.h"
+
+#include <algorithm>
+
+#include <Eigen/Dense>
+
+namespace bathyslam {
+namespace {
+
+// The inner Gauss–Newton iterations over one association stop when a step changes the answer
+// by less than this share of the pass's own rule, or after this many.
+constexpr double kInnerShare = 0.1;
+constexpr int kMaxInnerIterations = 2;
+constexpr double kFloatResolutionM = 1e-5;
+
+// x' = exp(δθ)(x - c) + c + δt: the perturbation the factors are linearised for.
+Eigen::Isometry3d perturbed(const Eigen::Isometry3d& t, const Vector6d& step, const Eigen::Vector3d& pivot) {
+  Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
+  const double angle = step.tail<3>().norm();
+  if (angle > 0) move.linear() = Eigen::AngleAxisd(angle, step.tail<3>() / angle).toRotationMatrix();
+  move.translation() = pivot - move.linear() * pivot + step.head<3>();
+  Eigen::Isometry3d out = move * t;
+  // Keep the rotation a rotation over hundreds of products.
+  out.linear() = Eigen::Quaterniond(out.rotation()).normalized().toRotationMatrix();
+  return out;
+}
+
+// PCL's rule: the largest change of a rotation-matrix entry over the rotation epsilon, or of a
+// translation over the transformation epsilon, below 1.
+// The Gauss–Newton step restricted to the directions the terrain observes. Each plane
+// covariance leaves every correspondence a pull of ½ I along the seabed (Σ Jᵀ ½ J, the
+// regularisation), so on a flat bottom the full step slides along it and turns in yaw, on
+// nothing but the nearest-neighbour pattern of the soundings, wherever the guess started (PCL's
+// BFGS stalls there instead, near its guess). What the terrain observes is the rest, Σ Jᵀ (M - ½ I) J,
+// compared with rotations in metres at the overlap (their RMS lever, as shape_scales does): its
+// directions below `min_share` of the best-observed one keep their guess ("solution remapping",
+// Zhang et al. 2016); the step is the minimiser over the others.
+Vector6d observed_step(const GicpLinearisation& lin, double min_share) {
+  // A whisker of damping (small_gicp's 1e-6) keeps an exactly singular system solvable.
+  if (min_share <= 0) return -(lin.hessian + 1e-6 * Matrix6d::Identity()).ldlt().solve(lin.gradient);
+  const Vector6d d = lin.regularisation.diagonal();
+  Vector6d scale = Vector6d::Ones();
+  for (int k = 0; k < 3; ++k) scale(3 + k) = 1.0 / std::max(std::sqrt(d(3 + k) / std::max(d(k), 1e-300)), 1e-9);
+  const Matrix6d observed = scale.asDiagonal() * (lin.hessian - lin.regularisation) * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(0.5 * (observed + observed.transpose()));
+  const double strongest = eigen.eigenvalues().maxCoeff();
+  int kept = 0;
+  Eigen::Matrix<double, 6, 6> basis;
+  for (int k = 0; k < 6; ++k) {
+    if (strongest > 0 && eigen.eigenvalues()(k) >= min_share * strongest) basis.col(kept++) = eigen.eigenvectors().col(k);
+  }
+  if (kept == 0) return Vector6d::Zero();
+  const Eigen::MatrixXd v = scale.asDiagonal() * basis.leftCols(kept);  // whitened directions as steps
+  const Eigen::MatrixXd reduced = v.transpose() * lin.hessian * v + 1e-6 * Eigen::MatrixXd::Identity(kept, kept);
+  return v * reduced.ldlt().solve(-v.transpose() * lin.gradient);
+}
+
+bool small_change(const Eigen::Isometry3d& before, const Eigen::Isometry3d& after, double convergence,
+                  double rotation_share = 1.0) {
+  const double rotation = (after.linear() - before.linear()).cwiseAbs().maxCoeff() / (rotation_share * kGicpRotationEpsilon);
+  const double translation = (after.translation() - before.translation()).cwiseAbs().maxCoeff() / convergence;
+  return std::max(rotation, translation) < 1;
+}
+
+Eigen::Vector3d target_centroid(const GicpCloud& target, const GicpOverlap& overlap) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < target.points.size(); ++j) {
+    if (overlap.target_allowed.empty() || overlap.target_allowed[j]) {
+      sum += target.points[j].cast<double>();
+      ++n;
+    }
+  }
+  return n > 0 ? Eigen::Vector3d(sum / static_cast<double>(n)) : sum;
+}
+
+}  // namespace
+
+Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& overlap) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (uint32_t i : overlap.source_points) sum += source.points[i].cast<double>();
+  return overlap.source_points.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(overlap.source_points.size()));
+}
+
+GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                                  const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
+                                  const Eigen::Vector3d& source_pivot, double max_correspondence_m,
+                                  double convergence, int max_iterations, double min_observed_share, int threads) {
+  const Eigen::Translation3d to_pivot(-pivot), from_source_pivot(source_pivot);
+  auto centred = [&](const Eigen::Isometry3d& t) { return Eigen::Isometry3d(to_pivot * t * from_source_pivot); };
+  // Float soundings cannot tell apart poses closer than their resolution (a float 100 m from
+  // the origin resolves 8 µm): PCL, whose transforms are float too, stops there whatever the
+  // epsilon; a double pose would go on creeping by microns as single associations flip.
+  convergence = std::max(convergence, kFloatResolutionM);
+  GaussNewtonPass pass;
+  pass.source_to_target = start;
+  std::vector<Eigen::Isometry3d> answers{centred(start)};  // to see a cycle
+  while (pass.iterations < max_iterations) {
+    // As PCL: associate, then minimise over those correspondences (PCL: BFGS, at most 20 inner
+    // iterations; here Gauss–Newton, which needs a few), then compare with the last answer. An
+    // association that no longer changes then gives the same answer, and the rule ends the pass.
+    const std::vector<GicpCorrespondence> correspondences =
+        associate_gicp(target, source, overlap, pass.source_to_target, max_correspondence_m, threads);
+    // PCL's BFGS refuses fewer than 4 correspondences and the registration then fails.
+    if (correspondences.size() < 4) return pass;
+    Eigen::Isometry3d next = pass.source_to_target;
+    for (int inner = 0; inner < kMaxInnerIterations; ++inner) {
+      const GicpLinearisation lin =
+          linearise_gicp(target, source, correspondences, next, pivot, threads, min_observed_share > 0);
+      const Vector6d step = observed_step(lin, min_observed_share);
+      if (!step.allFinite()) return pass;
+      const Eigen::Isometry3d stepped = perturbed(next, step, pivot);
+      const bool settled = small_change(centred(next), centred(stepped), kInnerShare * convergence, kInnerShare);
+      next = stepped;
+      if (settled) break;
+    }
+    ++pass.iterations;
+    // Converged by PCL's rule, or caught in a cycle: a few points near the gate or midway
+    // between two target points swap their nearest neighbour back and forth and the answer
+    // returns to an earlier one. PCL's rule alone never ends such a cycle at the refinement's
+    // tight epsilon; the answers in it agree within `convergence`.
+    const Eigen::Isometry3d centred_next = centred(next);
+    const bool done = std::any_of(answers.begin(), answers.end(), [&](const Eigen::Isometry3d& earlier) {
+      return small_change(earlier, centred_next, convergence);
+    });
+    answers.push_back(centred_next);
+    pass.source_to_target = next;
+    if (done) break;
+  }
+  pass.converged = true;  // PCL: converged on a small change or at the iteration limit
+  return pass;
+}
+
+PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                                       const Eigen::Isometry3d& guess, const GicpConfig& config,
+                                       const Eigen::Vector3d* hessian_anchor) {
+  // As the wrapper: about the overlaps' centroids, where yaw and translation are not the same
+  // motion (gicp.h, about_centroid).
+  const Eigen::Vector3d pivot = config.about_centroid ? target_centroid(target, overlap) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d source_pivot = config.about_centroid ? source_centroid(source, overlap) : Eigen::Vector3d::Zero();
+  const int threads = std::max(config.threads, 1);
+  GaussNewtonPass pass = gauss_newton_gicp(target, source, overlap, guess, pivot, source_pivot,
+                                           config.max_correspondence_m, config.convergence, config.max_iterations,
+                                           config.min_observed_share, threads);
+  if (config.refine_correspondence_m > 0) {
+    const GaussNewtonPass refined =
+        gauss_newton_gicp(target, source, overlap, pass.source_to_target, pivot, source_pivot,
+                          config.refine_correspondence_m, config.refine_convergence, config.max_iterations,
+                          config.min_observed_share, threads);
+    pass = {refined.source_to_target, pass.converged && refined.converged, pass.iterations + refined.iterations};
+  }
+  PreparedRegistration out;
+  out.registration.source_to_target = pass.source_to_target;
+  // Quality (and the Hessian) at Table 1's gate whatever pass produced the answer, as the wrapper
+  // measures it: one more association at the answer.
+  const Eigen::Vector3d anchor = hessian_anchor != nullptr ? pass.source_to_target * *hessian_anchor : Eigen::Vector3d::Zero();
+  const GicpLinearisation at_answer = linearise_gicp(target, source, overlap, pass.source_to_target, anchor,
+                                                     config.max_correspondence_m, threads, hessian_anchor != nullptr);
+  RegistrationQuality& q = out.registration.quality;
+  q.converged = pass.converged;
+  q.overlap_points = at_answer.correspondences;
+  q.overlap_mse_m2 = at_answer.correspondences > 0 ? at_answer.sq_distance_sum / at_answer.correspondences : 0.0;
+  q.fitness = overlap.source_points.empty()
+                  ? 0.0
+                  : static_cast<double>(at_answer.correspondences) / static_cast<double>(overlap.source_points.size());
+  if (hessian_anchor != nullptr) {
+    out.hessian.hessian = at_answer.hessian;
+    out.hessian.regularisation = at_answer.regularisation;
+    out.hessian.correspondences = at_answer.correspondences;
+  }
+  return out;
+}
+
+}  // namespace bathyslam
