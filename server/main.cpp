@@ -112,7 +112,7 @@ int serve(const ServeOptions& o) {
   gethostname(host, sizeof host - 1);
   service::Scheduler scheduler(surveys, jobs, results,
                               {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
-                               .scratch = scratch});
+                               .scratch = scratch, .retry = {}});
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::thread stopper([&] {

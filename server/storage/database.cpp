@@ -44,6 +44,14 @@ DatabaseError::DatabaseError(std::string sqlstate, const std::string& message)
     : std::runtime_error("database error " + sqlstate + ": " + message), sqlstate_(std::move(sqlstate)),
       message_(message) {}
 
+bool DatabaseError::transient() const {
+  const std::string_view state = sqlstate_;
+  return state.starts_with("08")                                          // connection exception
+         || state.starts_with("53")                                       // insufficient resources
+         || state == "57P01" || state == "57P02" || state == "57P03"      // shutdown, cannot connect now
+         || state == "40001" || state == "40P01";                         // serialization failure, deadlock
+}
+
 Param::Param(double value) : value_(shortest(value)) {}
 
 std::string float8_array(const double* values, std::size_t count) {

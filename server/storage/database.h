@@ -25,6 +25,9 @@ class DatabaseError : public std::runtime_error {
   DatabaseError(std::string sqlstate, const std::string& message);
   const std::string& sqlstate() const { return sqlstate_; }
   const std::string& message() const { return message_; }  // PostgreSQL's own words
+  // The same statement may succeed if tried again later: the connection was lost, the server is
+  // shutting down or starting, out of connections, or the transaction lost a serialization race.
+  bool transient() const;
 
  private:
   std::string sqlstate_;

@@ -172,6 +172,12 @@ bool JobQueue::release(const Lease& lease) {
                          {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 
+bool JobQueue::requeue_after_outage(const Lease& lease) {
+  auto connection = pool_.acquire();
+  return requeue_or_fail(*connection, kLeaseHeld, "requeued", "worker %s lost the database while running it",
+                         "max_attempts", {lease.job_id, lease.worker, lease.attempt}) == 1;
+}
+
 bool JobQueue::record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message) {
   if (!(progress >= 0 && progress <= 1)) throw std::invalid_argument("progress must be within [0, 1]");
   if (stage.empty()) throw std::invalid_argument("an event needs a stage");

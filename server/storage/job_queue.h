@@ -116,6 +116,10 @@ class JobQueue {
   // run out: re-queued, and allowed one more attempt, since a clean stop is not the job's fault.
   // False when the lease was no longer this worker's.
   bool release(const Lease& lease);
+  // A worker that could not finish because the database stayed away longer than its retries
+  // gives the job back for another attempt. Unlike release() the attempt counts, so that a job
+  // cannot bounce forever; with none left it fails. False when the lease was no longer its.
+  bool requeue_after_outage(const Lease& lease);
 
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
   std::vector<JobEvent> events(std::int64_t job_id);

@@ -390,8 +390,8 @@ class ServerStopTest(unittest.TestCase):
         self.assertEqual(self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
 
 
-class DatabaseOutageTest(unittest.TestCase):
-    """Health follows the database: a cluster of this test's own is stopped and started again."""
+class OwnCluster(unittest.TestCase):
+    """A test with a PostgreSQL cluster of its own, which it may stop, and a server on it."""
 
     def setUp(self):
         parent = tempfile.mkdtemp(prefix="bathyslam-outage-")
@@ -403,15 +403,21 @@ class DatabaseOutageTest(unittest.TestCase):
 
     def tearDown(self):
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
-        self.server.stop()
+        if self.server.process.poll() is None:
+            self.server.stop()
 
     def wait_for(self, status, seconds=15):
+        """The health status once it is `status`, or whatever it is after `seconds`."""
         deadline = time.monotonic() + seconds
         while True:
             reply = self.server.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
             if reply.status == status or time.monotonic() > deadline:
                 return reply.status
             time.sleep(0.2)
+
+
+class DatabaseOutageTest(OwnCluster):
+    """Health follows the database: a cluster of this test's own is stopped and started again."""
 
     def test_health_is_not_serving_while_the_database_is_down(self):
         serving, not_serving = health_pb2.HealthCheckResponse.SERVING, health_pb2.HealthCheckResponse.NOT_SERVING
