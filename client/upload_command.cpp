@@ -49,8 +49,12 @@ std::string default_name(const std::filesystem::path& bundle) {
 std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const UploadOptions& o, const BundleFiles& files,
                                    bool& ready) {
   if (!files.contains(kSurveyJsonFile)) throw std::runtime_error(o.bundle + ": no survey.json");
-  const nlohmann::json meta = nlohmann::json::parse(read_all(*files.open(kSurveyJsonFile)), nullptr, false);
-  if (meta.is_discarded() || !meta.is_object())
+  nlohmann::json meta;
+  try {
+    meta = parse_bounded_json(read_at_most(*files.open(kSurveyJsonFile), kSurveyJsonLimits.max_bytes), kSurveyJsonLimits);
+  } catch (const std::exception&) {
+  }
+  if (!meta.is_object())
     throw std::runtime_error(o.bundle + "/survey.json: not a JSON object (bathyslam inspect tells more)");
   const std::string name = !o.name.empty() ? o.name : meta.value("name", default_name(o.bundle));
   v1::ListSurveysRequest list;

@@ -8,6 +8,7 @@
 
 #include "core/io/bundle.h"
 
+#include "core/io/bounded_json.h"
 #include "core/io/bundle_files.h"
 #include "core/io/crs.h"
 #include "core/io/csv.h"
@@ -83,9 +84,12 @@ SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
   SurveyMetadata metadata;
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(text);
+    doc = parse_bounded_json(text, kSurveyJsonLimits);
   } catch (const nlohmann::json::parse_error& e) {
     problems.error(name, line_of_byte(text, e.byte), "", std::string("not valid JSON: ") + e.what());
+    return metadata;
+  } catch (const JsonLimitError& e) {
+    problems.error(name, 0, "", e.what());
     return metadata;
   }
   if (!doc.is_object()) {
@@ -265,7 +269,7 @@ BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   };
 
   if (auto json = open(kSurveyJsonFile, true)) {
-    survey.metadata = parse_survey_json(read_all(*json), kSurveyJsonFile, problems);
+    survey.metadata = parse_survey_json(read_at_most(*json, kSurveyJsonLimits.max_bytes), kSurveyJsonFile, problems);
   }
   std::optional<TimeSpan> nav_span;
   if (auto nav = open(kNavFile, true)) {

@@ -1,5 +1,6 @@
 #include "server/services/survey_service.h"
 
+#include "core/io/bounded_json.h"
 #include "core/io/crs.h"
 #include "core/summary/survey_summary.h"
 #include "server/log.h"
@@ -15,10 +16,18 @@ constexpr std::size_t kMaxChunkBytes = 1 << 20;
 // GetSurvey lists them all.
 constexpr std::size_t kProblemsInStatus = 40;
 
+// The free-form "sonar" and "vehicle" objects: as survey.json allows them (they come from it).
 nlohmann::json object_field(const std::string& field, const std::string& text) {
   if (text.empty()) return nlohmann::json::object();
-  nlohmann::json value = nlohmann::json::parse(text, nullptr, false);
-  if (value.is_discarded() || !value.is_object()) throw invalid(field, "must be a JSON object");
+  nlohmann::json value;
+  try {
+    value = parse_bounded_json(text, kSurveyJsonLimits);
+  } catch (const JsonLimitError& error) {
+    throw invalid(field, error.what());
+  } catch (const nlohmann::json::parse_error&) {
+    throw invalid(field, "must be a JSON object");
+  }
+  if (!value.is_object()) throw invalid(field, "must be a JSON object");
   return value;
 }
 
@@ -113,6 +122,9 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
       throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
                                                               " is over this server's limit of " +
                                                               std::to_string(context_.limits.max_file_bytes));
+    if (name == kSurveyJsonFile && message.size_bytes() > static_cast<std::int64_t>(kSurveyJsonLimits.max_bytes))
+      throw invalid("size_bytes", "survey.json is at most " + std::to_string(kSurveyJsonLimits.max_bytes) + " bytes, not " +
+                                      std::to_string(message.size_bytes()));
     storage::Sha256 digest{};
     std::copy(message.sha256().begin(), message.sha256().end(), digest.begin());
     try {

@@ -8,7 +8,8 @@ import unittest
 
 import grpc
 
-from service_api_test import ENV, OwnCluster, health_pb2, job_pb2, map_pb2, ready_survey
+from service_api_test import (ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, read, ready_survey, survey_pb2,
+                              upload_requests)
 
 SERVING = health_pb2.HealthCheckResponse.SERVING
 NOT_SERVING = health_pb2.HealthCheckResponse.NOT_SERVING
@@ -83,6 +84,54 @@ class JobThroughOutageTest(OutageTest):
         self.assertEqual(poses(self.server, job.id), poses(self.server, again.id))
         self.assertGreater(len(poses(self.server, job.id)), 5)
         print(f"\njob through two outages: {disturbed.finished_at - disturbed.started_at:.1f} s", flush=True)
+
+
+class HostileJsonTest(unittest.TestCase):
+    """JSON built to crash its reader (nested 100 000 deep: about 200 KB, under the message
+    limit) is refused with the field named, and the server stays up and unchanged."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.server = Server()
+        cls.surveys = cls.server.surveys
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+
+    def refused(self, call, request):
+        with self.assertRaises(grpc.RpcError) as raised:
+            call(request, timeout=60)
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
+        return raised.exception.details()
+
+    def test_deeply_nested_sonar_and_vehicle_json(self):
+        deep = '{"a": ' + "[" * 100000 + "]" * 100000 + "}"
+        for field in ("sonar_json", "vehicle_json"):
+            details = self.refused(self.surveys.CreateSurvey,
+                                   survey_pb2.CreateSurveyRequest(name="deep " + field, **{field: deep}))
+            self.assertEqual(details, field + ": nested deeper than 64 levels")
+        huge = '{"a": "' + "x" * (1536 << 10) + '"}'
+        self.assertEqual(self.refused(self.surveys.CreateSurvey, survey_pb2.CreateSurveyRequest(name="huge", sonar_json=huge)),
+                         "sonar_json: larger than 1048576 bytes")
+        listed = self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(), timeout=30)
+        self.assertEqual([s.name for s in listed.surveys if s.name.startswith(("deep", "huge"))], [])
+
+    def test_deeply_nested_survey_json_in_an_upload(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="deep bundle"), timeout=30).id
+        deep = ('{"name": "deep", "crs": "EPSG:32651", "sonar": {"a": ' + "[" * 100000 + "]" * 100000 + "}}").encode()
+        self.assertTrue(self.surveys.UploadFile(upload_requests(survey_id, "survey.json", deep), timeout=60).complete)
+        for name in ("nav.csv", "pings.csv"):
+            self.surveys.UploadFile(upload_requests(survey_id, name, read(name)), timeout=120)
+        details = self.refused(self.surveys.FinalizeSurvey, survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("survey.json: nested deeper than 64 levels", details)
+        survey = self.surveys.GetSurvey(survey_pb2.GetSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(survey.state, survey_pb2.Survey.UPLOADING)
+        # A survey.json over its limit is refused when declared, before a byte is stored.
+        big = b'{"name": "big", "crs": "EPSG:32651", "sonar": {"a": "' + b"x" * (2 << 20) + b'"}}'
+        details = self.refused(self.surveys.UploadFile, upload_requests(survey_id, "survey.json", big))
+        self.assertEqual(details, f"size_bytes: survey.json is at most 1048576 bytes, not {len(big)}")
 
 
 if __name__ == "__main__":
