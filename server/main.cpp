@@ -68,6 +68,7 @@ struct ServeOptions {
   std::string dev_tenant;
   std::string scratch;
   int lease_seconds = 30;
+  int statement_timeout_seconds = 60;
   service::Limits limits;
 };
 
@@ -80,7 +81,8 @@ int serve(const ServeOptions& o) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers));
+  storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers),
+                               {.statement_timeout = std::chrono::seconds(o.statement_timeout_seconds)});
   storage::SurveyStore surveys(pool);
   storage::JobQueue jobs(pool, {std::chrono::seconds(o.lease_seconds), std::chrono::seconds(5)});
   storage::ResultStore results(pool);
@@ -157,6 +159,9 @@ int main(int argc, char** argv) {
   app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));
+  app.add_option("--statement-timeout", o.statement_timeout_seconds,
+                 "seconds after which PostgreSQL cancels a statement of a request or a job")
+      ->capture_default_str()->check(CLI::Range(1, 3600));
   app.add_option("--max-file-bytes", o.limits.max_file_bytes, "largest uploaded file")->capture_default_str();
   app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
       ->capture_default_str()->check(CLI::PositiveNumber);
