@@ -3,6 +3,7 @@
 #include <cmath>
 #include <memory>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 
@@ -271,16 +272,24 @@ BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   if (auto json = open(kSurveyJsonFile, true)) {
     survey.metadata = parse_survey_json(read_at_most(*json, kSurveyJsonLimits.max_bytes), kSurveyJsonFile, problems);
   }
+  // A line too long ends the reading of its file with a problem at that line.
+  auto guarded = [&](std::string_view file, const std::function<void()>& parse) {
+    try {
+      parse();
+    } catch (const LineTooLong& e) {
+      problems.error(std::string(file), e.line(), "", e.what());
+    }
+  };
   std::optional<TimeSpan> nav_span;
   if (auto nav = open(kNavFile, true)) {
-    survey.nav = parse_nav_csv(*nav, kNavFile, problems);
+    guarded(kNavFile, [&] { survey.nav = parse_nav_csv(*nav, kNavFile, problems); });
     if (survey.nav.size() >= 2) nav_span = TimeSpan{survey.nav.front().time, survey.nav.back().time};
   }
   if (auto pings = open(kPingsFile, true)) {
-    parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams);
+    guarded(kPingsFile, [&] { parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams); });
   }
   if (auto reference = open(kReferenceNavFile, false)) {
-    survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems);
+    guarded(kReferenceNavFile, [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems); });
   }
 
   BundleReadResult result;

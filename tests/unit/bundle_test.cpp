@@ -172,6 +172,14 @@ TEST(BoundedJson, LimitsAreExactAndSyntaxErrorsStayParseErrors) {
   EXPECT_THROW(parse_bounded_json("[1,", limits), nlohmann::json::parse_error);
 }
 
+TEST_F(BundleTest, ALineTooLongIsNamedAndEndsTheFile) {
+  replace_line(kNavFile, 3, std::string(100000, '1'));
+  replace_line(kPingsFile, 1, std::string(100000, 't'));
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("nav.csv:3: line longer than 65536 bytes; the rest of the file was not read"));
+  EXPECT_THAT(problems, HasSubstr("pings.csv:1: line longer than 65536 bytes"));
+}
+
 TEST_F(BundleTest, NavHeaderMustBeExact) {
   replace_line(kNavFile, 1, "time,easting,northing,depth,roll,pitch,yaw");
   EXPECT_THAT(expect_rejected(),
