@@ -114,7 +114,7 @@ int serve(const ServeOptions& o) {
   gethostname(host, sizeof host - 1);
   service::Scheduler scheduler(surveys, jobs, results,
                               {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
-                               .scratch = scratch, .retry = {}});
+                               .scratch = scratch, .retry = {}, .max_map_cells = o.limits.max_map_cells});
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::thread stopper([&] {
@@ -163,6 +163,8 @@ int main(int argc, char** argv) {
                  "seconds after which PostgreSQL cancels a statement of a request or a job")
       ->capture_default_str()->check(CLI::Range(1, 3600));
   app.add_option("--max-file-bytes", o.limits.max_file_bytes, "largest uploaded file")->capture_default_str();
+  app.add_option("--max-map-cells", o.limits.max_map_cells, "cells of one survey's map at 0.5 m; larger surveys are refused")
+      ->capture_default_str();
   app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")

@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "core/pipeline/pipeline.h"
+#include "core/fuse/map_extent.h"
 #include "core/pipeline/report.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
@@ -220,6 +221,9 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       return storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
     });
     if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+    // Finalize checked this too; a survey finalized before the limit existed is checked here.
+    if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, options_.max_map_cells))
+      throw std::runtime_error(problem->to_string());
     event("load", 1, std::to_string(bundle.survey->pings.size()) + " pings");
 
     // Progress: every stage change, and within a stage at most every `progress_every`.

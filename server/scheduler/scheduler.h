@@ -27,6 +27,7 @@ struct SchedulerOptions {
   std::chrono::milliseconds heartbeat{5'000};      // well within the queue's lease
   std::chrono::milliseconds progress_every{500};   // at most one progress event per stage this often
   RetryPolicy retry;                               // storing results through a database outage
+  std::uint64_t max_map_cells = 100'000'000;       // a larger map is refused before fusion
 };
 
 class Scheduler {

@@ -1,5 +1,7 @@
 #include "server/services/survey_service.h"
 
+#include "core/fuse/fuse.h"
+#include "core/fuse/map_extent.h"
 #include "core/io/bounded_json.h"
 #include "core/io/crs.h"
 #include "core/summary/survey_summary.h"
@@ -118,6 +120,15 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     if (!storage::is_bundle_file(name))
       throw invalid("file_name", "'" + name + "' is not a bundle file (survey.json, nav.csv, pings.csv, reference_nav.csv)");
     if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
+    if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
+    // The first chunk is checked before the upload is declared, so that a refused stream leaves
+    // nothing behind; later ones are checked as they come (what came before them stays).
+    if (message.offset() < 0) throw invalid("offset", "must not be negative");
+    if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
+    if (message.offset() + static_cast<std::int64_t>(message.data().size()) > message.size_bytes())
+      throw invalid("data", "'" + name + "' was declared " + std::to_string(message.size_bytes()) +
+                                " bytes; this chunk would end at " +
+                                std::to_string(message.offset() + static_cast<std::int64_t>(message.data().size())));
     if (message.size_bytes() > context_.limits.max_file_bytes)
       throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
                                                               " is over this server's limit of " +
@@ -178,6 +189,12 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
       problems.push_back(to_json({Problem::Severity::kError, std::string(kSurveyJsonFile), 0, "crs",
                                   "'" + bundle.survey->metadata.crs + "' but the survey was created with '" + survey.crs + "'"}));
       errors = true;
+    }
+    if (bundle.survey) {
+      if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, context_.limits.max_map_cells)) {
+        problems.push_back(to_json(*problem));
+        errors = true;
+      }
     }
     storage::Validation validation{!errors, problems, nullptr};
     if (!errors && bundle.survey) validation.summary = to_json(summarize(*bundle.survey));

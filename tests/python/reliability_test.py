@@ -2,14 +2,15 @@
 """The server under a database outage and hostile input: it must stay up, say what is wrong,
 and finish the work it took. The same environment as service_api_test.py (set by ctest), whose
 Server and helpers this reuses: a real bathyslam-server on a real PostgreSQL."""
+import hashlib
 import subprocess
 import time
 import unittest
 
 import grpc
 
-from service_api_test import (ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, read, ready_survey, survey_pb2,
-                              upload_requests)
+from service_api_test import (ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, psql, read, ready_survey,
+                              survey_pb2, upload_requests)
 
 SERVING = health_pb2.HealthCheckResponse.SERVING
 NOT_SERVING = health_pb2.HealthCheckResponse.NOT_SERVING
@@ -86,9 +87,10 @@ class JobThroughOutageTest(OutageTest):
         print(f"\njob through two outages: {disturbed.finished_at - disturbed.started_at:.1f} s", flush=True)
 
 
-class HostileJsonTest(unittest.TestCase):
-    """JSON built to crash its reader (nested 100 000 deep: about 200 KB, under the message
-    limit) is refused with the field named, and the server stays up and unchanged."""
+class HostileInputTest(unittest.TestCase):
+    """Requests and files built to crash or exhaust the server (JSON nested 100 000 deep, about
+    200 KB, under the message limit; chunks and sizes out of bounds; a survey spanning 500 km)
+    are refused with the field named, and the server stays up and its database unchanged."""
 
     @classmethod
     def setUpClass(cls):
@@ -105,6 +107,55 @@ class HostileJsonTest(unittest.TestCase):
         self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
         self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
         return raised.exception.details()
+
+    def fingerprint(self):
+        """Row counts and a checksum of the tables an upload or a survey touches."""
+        return psql(self.server.url, "SELECT (SELECT count(*) FROM surveys), (SELECT count(*) FROM survey_files),"
+                                     " (SELECT coalesce(sum(committed_bytes), 0) FROM survey_files),"
+                                     " (SELECT count(*) FROM survey_file_chunks),"
+                                     " (SELECT md5(coalesce(string_agg(md5(data), '' ORDER BY file_id, seq), ''))"
+                                     "  FROM survey_file_chunks), (SELECT count(*) FROM survey_validations WHERE valid)")
+
+    def test_upload_streams_out_of_bounds(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="bounds"), timeout=30).id
+        nav = read("nav.csv")
+        sha = hashlib.sha256(nav).digest()
+
+        def stream(name="nav.csv", size=len(nav), offset=0, data=b"", **extra):
+            yield survey_pb2.UploadFileRequest(survey_id=survey_id, file_name=name, size_bytes=size, sha256=sha,
+                                               offset=offset, data=data, **extra)
+
+        cases = [
+            (stream(size=-1), grpc.StatusCode.INVALID_ARGUMENT, "size_bytes: must not be negative"),
+            (stream(size=9 << 30), grpc.StatusCode.RESOURCE_EXHAUSTED, "size_bytes: 9663676416 is over this server's limit"),
+            (stream(offset=-5, data=b"x"), grpc.StatusCode.INVALID_ARGUMENT, "offset: must not be negative"),
+            (stream(data=b"x" * ((1 << 20) + 1)), grpc.StatusCode.INVALID_ARGUMENT, "data: a chunk holds at most 1 MiB"),
+            (stream(size=10, data=b"x" * 20), grpc.StatusCode.INVALID_ARGUMENT,
+             "data: 'nav.csv' was declared 10 bytes; this chunk would end at 20"),
+            (stream(name="extra.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: 'extra.csv' is not a bundle file"),
+            (stream(name="../nav.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: '../nav.csv' is not a bundle file"),
+        ]
+        before = self.fingerprint()
+        for requests, code, message in cases:
+            with self.assertRaises(grpc.RpcError) as raised:
+                self.surveys.UploadFile(requests, timeout=60)
+            self.assertEqual((raised.exception.code(), raised.exception.details()[:len(message)]), (code, message))
+            self.assertEqual(self.fingerprint(), before, message)
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+
+    def test_a_survey_spanning_500_km_is_refused_before_any_map(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="stray fix"), timeout=30).id
+        files = {"survey.json": b'{"name": "stray fix", "crs": "EPSG:32651"}',
+                 "nav.csv": b"time,easting,northing,depth,roll,pitch,heading\n"
+                            b"1720000000,452000,4630000,1,0,0,90\n1720000010,952000,5130000,1,0,0,90\n",
+                 "pings.csv": b"time,beam,along,across,down\n1720000001,0,0,5,10\n"}
+        for name, data in files.items():
+            self.surveys.UploadFile(upload_requests(survey_id, name, data), timeout=60)
+        details = self.refused(self.surveys.FinalizeSurvey, survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("nav.csv: easting, northing: the survey covers 500010 m × 500010 m: a map of 1000042000441 cells"
+                      " at 0.5 m, over the limit of 100000000", details)
+        survey = self.surveys.GetSurvey(survey_pb2.GetSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(survey.state, survey_pb2.Survey.UPLOADING)
 
     def test_deeply_nested_sonar_and_vehicle_json(self):
         deep = '{"a": ' + "[" * 100000 + "]" * 100000 + "}"
