@@ -167,6 +167,7 @@ void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
+  storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
   constexpr int kStores = 5;
   int stored = 0;
   auto step = [&](const char* what, const std::function<void()>& save) {
@@ -175,20 +176,20 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
     save();
   };
   step("submaps", [&] {
-    results_.discard(id);  // whatever an earlier attempt or try stored before it was stopped
-    results_.save_origin(id, result.submaps.origin);
-    results_.save_submaps(id, result.submaps.submaps);
+    results.discard(id);  // whatever an earlier attempt or try stored before it was stopped
+    results.save_origin(id, result.submaps.origin);
+    results.save_submaps(id, result.submaps.submaps);
   });
-  step("constraints", [&] { results_.save_constraints(id, result.constraints); });
-  step("optimized poses", [&] { results_.save_optimized_poses(id, result.optimized_poses); });
+  step("constraints", [&] { results.save_constraints(id, result.constraints); });
+  step("optimized poses", [&] { results.save_optimized_poses(id, result.optimized_poses); });
   step("tiles", [&] {
-    for (const auto& [key, bytes] : map.tiles) results_.put_tile(id, key, bytes);
-    if (map.grid.levels > 0) results_.save_map_grid(id, map.grid);
+    for (const auto& [key, bytes] : map.tiles) results.put_tile(id, key, bytes);
+    if (map.grid.levels > 0) results.save_map_grid(id, map.grid);
   });
   step("report", [&] {
     storage::Report report = report_with_plots(result, options_.scratch);
     report.plots.insert(map.plots.begin(), map.plots.end());
-    results_.save_report(id, report);
+    results.save_report(id, report);
   });
 }
 
@@ -249,6 +250,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     if (retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); }))
       log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
+  } catch (const storage::LeaseLost& error) {
+    log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
   } catch (const Cancelled&) {
     if (stopping_) {
       release(lease, seconds_since(start));

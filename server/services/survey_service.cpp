@@ -173,7 +173,8 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     if (survey.ready) return describe(survey, true, reply);  // finalizing twice changes nothing
     nlohmann::json problems = nlohmann::json::array();
     bool errors = false;
-    for (const storage::UploadState& upload : context_.surveys.uploads(survey.id)) {
+    const std::vector<storage::UploadState> uploads = context_.surveys.uploads(survey.id);  // what is validated
+    for (const storage::UploadState& upload : uploads) {
       if (upload.complete) continue;
       problems.push_back(to_json({Problem::Severity::kError, upload.name, 0, "",
                                   "upload incomplete: " + std::to_string(upload.committed_bytes) + " of " +
@@ -198,7 +199,9 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     }
     storage::Validation validation{!errors, problems, nullptr};
     if (!errors && bundle.survey) validation.summary = to_json(summarize(*bundle.survey));
-    context_.surveys.save_validation(survey.id, validation);
+    if (!context_.surveys.save_validation_if_unchanged(survey.id, validation, uploads))
+      throw Refusal(grpc::StatusCode::ABORTED, "survey " + std::to_string(survey.id) +
+                                                   ": its files changed while it was validated; finalize it again");
     log("survey %lld finalized: %s, %zu problems", static_cast<long long>(survey.id), errors ? "invalid" : "ready",
         problems.size());
     if (errors) {

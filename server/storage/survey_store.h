@@ -112,6 +112,12 @@ class SurveyStore {
   Bytes read_file(std::int64_t survey_id, const std::string& name);
 
   void save_validation(std::int64_t survey_id, const Validation& validation);
+  // Saves `validation` only if the survey's uploads are still `validated` (what was read to make
+  // it), checked and saved under a lock on the survey that every upload step takes too: a file
+  // changed during validation cannot become part of a ready survey. False (nothing saved) if
+  // they changed.
+  bool save_validation_if_unchanged(std::int64_t survey_id, const Validation& validation,
+                                    const std::vector<UploadState>& validated);
   std::optional<Validation> validation(std::int64_t survey_id);
 
   // Removes the survey and everything under it (files, jobs, results). False if there was none.

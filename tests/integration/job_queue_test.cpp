@@ -1,5 +1,6 @@
 // The job queue under the conditions it exists for: racing workers, dead workers, idle workers.
 #include <algorithm>
+#include <atomic>
 #include <barrier>
 #include <chrono>
 #include <cstdio>
@@ -169,6 +170,32 @@ TEST(JobQueue, AJobGivenBackAfterAnOutageUsesItsAttemptAndFailsWhenNoneAreLeft) 
   ASSERT_EQ(events.size(), 2u);
   EXPECT_EQ(events[0].stage, "requeued");
   EXPECT_EQ(events[0].message, "worker first lost the database while running it; re-queued");
+}
+
+TEST(JobQueue, TheActiveJobLimitHoldsUnderConcurrentSubmits) {
+  testing::FreshDatabase db;
+  ConnectionPool setup(db.conninfo(), 1);
+  SurveyStore surveys(setup);
+  const std::int64_t tenant = surveys.create_tenant("acme");
+  const std::int64_t survey = surveys.create_survey(tenant, "lake", {});
+  constexpr int kSubmitters = 8, kLimit = 3;
+  std::atomic<int> accepted{0};
+  std::barrier start(kSubmitters);
+  std::vector<std::thread> submitters;
+  for (int i = 0; i < kSubmitters; ++i)
+    submitters.emplace_back([&] {
+      ConnectionPool pool(db.conninfo(), 1);  // a connection each, as concurrent requests have
+      JobQueue queue(pool);
+      start.arrive_and_wait();
+      if (queue.enqueue_within_limit({survey, "gicp"}, tenant, kLimit)) ++accepted;
+    });
+  for (std::thread& submitter : submitters) submitter.join();
+  EXPECT_EQ(accepted, kLimit);
+  JobQueue queue(setup);
+  EXPECT_EQ(queue.active_jobs(tenant), kLimit);
+  // Another tenant has a limit of its own.
+  const std::int64_t other = surveys.create_tenant("other");
+  EXPECT_TRUE(queue.enqueue_within_limit({surveys.create_survey(other, "lake", {}), "gicp"}, other, kLimit));
 }
 
 TEST(DatabaseError, ALostConnectionIsTransientAConstraintViolationIsNot) {
