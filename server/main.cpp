@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <ctime>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -53,10 +54,54 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
   return surveys.create_tenant(name);
 }
 
-int run_token(const std::string& db, const std::string& tenant, const std::string& description) {
+struct TokenOptions {
+  std::string tenant, description, token;
+  std::int64_t id = 0;
+};
+
+int create_token(const std::string& db, const TokenOptions& t) {
+  if (t.tenant.empty()) {
+    std::fprintf(stderr, "bathyslam-server token create: --tenant is required\n");
+    return 2;
+  }
   storage::ConnectionPool pool(db, 1);
   storage::SurveyStore surveys(pool);
-  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, tenant), description).c_str());
+  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, t.tenant), t.description).c_str());
+  return 0;
+}
+
+int revoke_token(const std::string& db, const TokenOptions& t) {
+  if ((t.id > 0) == !t.token.empty()) {
+    std::fprintf(stderr, "bathyslam-server token revoke: give either --id (from token list) or --token\n");
+    return 2;
+  }
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  if (t.id > 0 ? surveys.revoke_token(t.id) : surveys.revoke_token(t.token)) {
+    std::printf("revoked\n");
+    return 0;
+  }
+  std::fprintf(stderr, "bathyslam-server token revoke: no such token, or revoked already\n");
+  return 1;
+}
+
+std::string utc(double seconds) {
+  const std::time_t time = static_cast<std::time_t>(seconds);
+  std::tm tm{};
+  gmtime_r(&time, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+int list_tokens(const std::string& db, const TokenOptions& t) {
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  std::printf("%6s  %-20s  %-20s  %-20s  %s\n", "id", "tenant", "created", "revoked", "description");
+  for (const storage::TokenInfo& token : surveys.list_tokens(t.tenant.empty() ? std::nullopt : std::optional(t.tenant)))
+    std::printf("%6lld  %-20s  %-20s  %-20s  %s\n", static_cast<long long>(token.id), token.tenant.c_str(),
+                utc(token.created_at).c_str(), token.revoked_at ? utc(*token.revoked_at).c_str() : "-",
+                token.description.c_str());
   return 0;
 }
 
@@ -171,11 +216,22 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(1, 10));
   CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");
   add_db_option(migrate);  // `migrate --db ...` as well as `--db ... migrate`
-  CLI::App* token = app.add_subcommand("token", "issue an API token for a tenant (created if needed) and print it");
+  CLI::App* token = app.add_subcommand("token", "API tokens: create (the default), revoke, list");
   add_db_option(token);
-  std::string tenant, description;
-  token->add_option("--tenant", tenant, "tenant name")->required();
-  token->add_option("--description", description, "what the token is for");
+  TokenOptions t;
+  token->add_option("--tenant", t.tenant, "tenant name (token --tenant NAME: the same as token create)");
+  token->add_option("--description", t.description, "what the token is for");
+  CLI::App* create = token->add_subcommand("create", "issue a token for a tenant (created if needed) and print it");
+  add_db_option(create);
+  create->add_option("--tenant", t.tenant, "tenant name")->required();
+  create->add_option("--description", t.description, "what the token is for");
+  CLI::App* revoke = token->add_subcommand("revoke", "revoke a token: it is refused from now on");
+  add_db_option(revoke);
+  revoke->add_option("--id", t.id, "the token's id, from token list");
+  revoke->add_option("--token", t.token, "the token itself");
+  CLI::App* list = token->add_subcommand("list", "every token (never the secret), or a tenant's");
+  add_db_option(list);
+  list->add_option("--tenant", t.tenant, "only this tenant's");
   CLI11_PARSE(app, argc, argv);
   if (o.db.empty()) {
     std::fprintf(stderr, "bathyslam-server: no database; pass --db or set BATHYSLAM_DB\n");
@@ -187,7 +243,9 @@ int main(int argc, char** argv) {
       storage::Connection connection(o.db);
       storage::ensure_schema(connection, o.migrate);
     }
-    if (*token) return run_token(o.db, tenant, description);
+    if (*revoke) return revoke_token(o.db, t);
+    if (*list) return list_tokens(o.db, t);
+    if (*token) return create_token(o.db, t);
     return serve(o);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "bathyslam-server: %s\n", error.what());

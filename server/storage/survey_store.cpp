@@ -138,6 +138,29 @@ bool SurveyStore::revoke_token(const std::string& token) {
              .affected() == 1;
 }
 
+bool SurveyStore::revoke_token(std::int64_t token_id) {
+  auto connection = pool_.acquire();
+  return connection->exec("UPDATE api_tokens SET revoked_at = now() WHERE id = $1 AND revoked_at IS NULL", {token_id})
+             .affected() == 1;
+}
+
+std::vector<TokenInfo> SurveyStore::list_tokens(const std::optional<std::string>& tenant) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT t.id, n.name, t.description, extract(epoch FROM t.created_at)::float8,"
+      " extract(epoch FROM t.revoked_at)::float8 FROM api_tokens t JOIN tenants n ON n.id = t.tenant_id"
+      " WHERE $1::text IS NULL OR n.name = $1 ORDER BY t.id",
+      {tenant});
+  std::vector<TokenInfo> tokens;
+  for (int row = 0; row < rows.rows(); ++row) {
+    TokenInfo token{rows.int64(row, 0), std::string(rows.text(row, 1)), std::string(rows.text(row, 2)),
+                    rows.float8(row, 3), std::nullopt};
+    if (!rows.is_null(row, 4)) token.revoked_at = rows.float8(row, 4);
+    tokens.push_back(std::move(token));
+  }
+  return tokens;
+}
+
 std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::string& name,
                                         const std::vector<FileUpload>& files) {
   if (name.empty()) throw std::invalid_argument("a survey needs a name");

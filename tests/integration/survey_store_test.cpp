@@ -98,6 +98,19 @@ TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
   EXPECT_FALSE(store.revoke_token(token));
   EXPECT_EQ(store.tenant_of_token(token), std::nullopt);
   EXPECT_EQ(store.tenant_of_token(second), other);
+
+  // Listed without the secrets; revoked by the id the list shows.
+  std::vector<TokenInfo> listed = store.list_tokens();
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(listed[0].tenant, "acme");
+  EXPECT_EQ(listed[0].description, "ci");
+  EXPECT_TRUE(listed[0].revoked_at);
+  EXPECT_FALSE(listed[1].revoked_at);
+  EXPECT_EQ(store.list_tokens("other").size(), 1u);
+  EXPECT_TRUE(store.list_tokens("nobody").empty());
+  EXPECT_TRUE(store.revoke_token(listed[1].id));
+  EXPECT_FALSE(store.revoke_token(listed[1].id));
+  EXPECT_EQ(store.tenant_of_token(second), std::nullopt);
 }
 
 TEST(SurveyStore, TheLatestValidationIsKept) {
