@@ -7,6 +7,8 @@
 #include <csignal>
 #include <ctime>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <thread>
@@ -114,8 +116,30 @@ struct ServeOptions {
   std::string scratch;
   int lease_seconds = 30;
   int statement_timeout_seconds = 60;
+  std::string tls_cert, tls_key, tls_client_ca;  // PEM files; no certificate: plaintext
   service::Limits limits;
 };
+
+std::string read_pem(const std::string& option, const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(option + ": cannot read " + path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// TLS when a certificate is given; with a client CA, clients must present a certificate it signed.
+std::shared_ptr<grpc::ServerCredentials> server_credentials(const ServeOptions& o) {
+  if (o.tls_cert.empty() != o.tls_key.empty()) throw std::runtime_error("--tls-cert and --tls-key go together");
+  if (o.tls_cert.empty()) {
+    if (!o.tls_client_ca.empty()) throw std::runtime_error("--tls-client-ca needs --tls-cert and --tls-key");
+    return grpc::InsecureServerCredentials();
+  }
+  grpc::SslServerCredentialsOptions options(o.tls_client_ca.empty()
+                                                ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                                : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+  options.pem_key_cert_pairs.push_back({read_pem("--tls-key", o.tls_key), read_pem("--tls-cert", o.tls_cert)});
+  if (!o.tls_client_ca.empty()) options.pem_root_certs = read_pem("--tls-client-ca", o.tls_client_ca);
+  return grpc::SslServerCredentials(options);
+}
 
 int serve(const ServeOptions& o) {
   // Block the stop signals before any thread starts, so every thread inherits the mask; one
@@ -145,7 +169,7 @@ int serve(const ServeOptions& o) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(o.listen, server_credentials(o), &port);
   builder.RegisterService(&survey_service);
   builder.RegisterService(&job_service);
   builder.RegisterService(&map_service);
@@ -204,6 +228,9 @@ int main(int argc, char** argv) {
   app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));
+  app.add_option("--tls-cert", o.tls_cert, "PEM certificate (chain): serve TLS")->envname("BATHYSLAM_TLS_CERT");
+  app.add_option("--tls-key", o.tls_key, "PEM private key of --tls-cert")->envname("BATHYSLAM_TLS_KEY");
+  app.add_option("--tls-client-ca", o.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
   app.add_option("--statement-timeout", o.statement_timeout_seconds,
                  "seconds after which PostgreSQL cancels a statement of a request or a job")
       ->capture_default_str()->check(CLI::Range(1, 3600));
