@@ -183,7 +183,11 @@ int serve(const ServeOptions& o) {
   gethostname(host, sizeof host - 1);
   service::Scheduler scheduler(surveys, jobs, results,
                               {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
-                               .scratch = scratch, .retry = {}, .max_map_cells = o.limits.max_map_cells});
+                               .scratch = scratch,
+                               // Three heartbeats per lease: one lost to a slow database does not lose the job.
+                               .heartbeat = std::min<std::chrono::milliseconds>(std::chrono::seconds(5),
+                                                                                std::chrono::seconds(o.lease_seconds) / 3),
+                               .retry = {}, .max_map_cells = o.limits.max_map_cells});
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::thread stopper([&] {

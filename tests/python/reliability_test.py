@@ -87,6 +87,40 @@ class JobThroughOutageTest(OutageTest):
         print(f"\njob through two outages: {disturbed.finished_at - disturbed.started_at:.1f} s", flush=True)
 
 
+class KilledServerTest(unittest.TestCase):
+    """Two servers on one database; the one running a job is killed outright (SIGKILL: no
+    give-back). The other reaps the job once its lease expires and finishes it with the poses of
+    an undisturbed run. A 5 s lease keeps the test short."""
+
+    def setUp(self):
+        self.first = Server(args=["--lease-seconds", "5"])
+        self.addCleanup(self.first.stop)
+
+    def test_the_other_server_finishes_the_job_of_a_killed_one(self):
+        survey_id = ready_survey(self.first.surveys, "killed")
+        job = self.first.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        for event in self.first.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
+            if event.stage == "register":
+                break
+        # The second server starts once the first holds the job, so that it is the first's to lose.
+        second = Server(args=["--lease-seconds", "5"], db=self.first.db)
+        self.addCleanup(second.stop)
+        self.first.channel.close()
+        self.first.process.kill()
+        self.first.process.wait(timeout=30)
+        self.first.process.stdout.close()
+        killed = time.monotonic()
+        ended = final_state(second, job.id)
+        log = second.server_log()
+        self.assertEqual(ended.state, job_pb2.SUCCEEDED, ended.error + log)
+        self.assertEqual(ended.attempts, 2, log)
+        self.assertIn(f"job {job.id}: claimed by", log)
+        print(f"\nkilled server's job finished by the other {time.monotonic() - killed:.1f} s after the kill", flush=True)
+        again = second.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        self.assertEqual(final_state(second, again.id).state, job_pb2.SUCCEEDED, second.server_log())
+        self.assertEqual(poses(second, job.id), poses(second, again.id))
+
+
 class HostileInputTest(unittest.TestCase):
     """Requests and files built to crash or exhaust the server (JSON nested 100 000 deep, about
     200 KB, under the message limit; chunks and sizes out of bounds; a survey spanning 500 km)

@@ -45,20 +45,24 @@ class Server:
     """bathyslam-server on a database of its own, on a free port."""
     count = 0
 
-    def __init__(self, cluster=None):
+    def __init__(self, cluster=None, args=(), db=None):
+        """`args`: more server options; `db`: another Server's database, shared (not dropped here)."""
         pg_sh, cluster = ENV["PG_SH"], cluster or ENV["BATHYSLAM_TEST_PG"]
         Server.count += 1
-        self.db = f"service_api_{os.getpid()}_{Server.count}"
+        self.db = db or f"service_api_{os.getpid()}_{Server.count}"
+        self.args, self.owns_db = list(args), db is None
         self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
         self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
-        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
-        self.log = open(os.path.join(STUBS, f"{self.db}.log"), "w+")
+        if self.owns_db:
+            psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
+        self.log = open(os.path.join(STUBS, f"{self.db}_{Server.count}.log"), "w+")
         self.start()
 
     def start(self):
         """A server process on this database (again, after halt())."""
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
-                                         "--workers", "1", "--dev-tenant", "python"], stdout=subprocess.PIPE, stderr=self.log, text=True)
+                                         "--workers", "1", "--dev-tenant", "python", *self.args], stdout=subprocess.PIPE,
+                                        stderr=self.log, text=True)
         line = self.process.stdout.readline()
         match = re.search(r"listening on (\S+)", line)
         if not match:
@@ -83,9 +87,11 @@ class Server:
         self.process.stdout.close()
 
     def stop(self):
-        self.halt()
+        if self.process.poll() is None:
+            self.halt()
         self.log.close()
-        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
+        if self.owns_db:
+            psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
 
 
 def upload_requests(survey_id, name, data, start=0, sha=None, cut_after=None):
