@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 
 namespace bathyslam::cli {
 namespace {
@@ -22,12 +24,27 @@ const char* code_name(grpc::StatusCode code) {
   }
 }
 
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 }  // namespace
 
 std::shared_ptr<grpc::Channel> Remote::channel() const {
   grpc::ChannelArguments arguments;
   arguments.SetMaxReceiveMessageSize(64 << 20);  // a report with its plots
-  return grpc::CreateCustomChannel(server, grpc::InsecureChannelCredentials(), arguments);
+  if (!tls && !(ca.empty() && cert.empty() && key.empty())) throw std::runtime_error("--ca, --cert, --key: only with --tls");
+  if (cert.empty() != key.empty()) throw std::runtime_error("--cert and --key go together");
+  if (!tls) return grpc::CreateCustomChannel(server, grpc::InsecureChannelCredentials(), arguments);
+  grpc::SslCredentialsOptions options;
+  if (!ca.empty()) options.pem_root_certs = read_text_file(ca);
+  if (!cert.empty()) {
+    options.pem_cert_chain = read_text_file(cert);
+    options.pem_private_key = read_text_file(key);
+  }
+  return grpc::CreateCustomChannel(server, grpc::SslCredentials(options), arguments);
 }
 
 std::unique_ptr<grpc::ClientContext> Remote::context(double deadline_s) const {
@@ -43,6 +60,10 @@ void add_remote_options(CLI::App* command, Remote& remote) {
   command->add_option("--server", remote.server, "server address host:port")->envname("BATHYSLAM_SERVER")
       ->capture_default_str();
   command->add_option("--token", remote.token, "API token (bathyslam-server token)")->envname("BATHYSLAM_TOKEN");
+  command->add_flag("--tls", remote.tls, "connect with TLS")->envname("BATHYSLAM_TLS");
+  command->add_option("--ca", remote.ca, "PEM file of the CA to trust (with --tls)")->envname("BATHYSLAM_CA");
+  command->add_option("--cert", remote.cert, "PEM client certificate, for mutual TLS")->envname("BATHYSLAM_CERT");
+  command->add_option("--key", remote.key, "PEM private key of --cert")->envname("BATHYSLAM_KEY");
 }
 
 CallFailed::CallFailed(const std::string& call, const grpc::Status& status)

@@ -14,13 +14,16 @@ namespace bathyslam::cli {
 struct Remote {
   std::string server = "127.0.0.1:50051";
   std::string token;
+  bool tls = false;  // --tls: the server's certificate is checked against the system's CAs or --ca
+  std::string ca;    // PEM file of the CA (or self-signed certificate) to trust instead
+  std::string cert, key;  // PEM files: this client's certificate, for a server that requires one
 
   std::shared_ptr<grpc::Channel> channel() const;
   // A context with the token; `deadline_s` > 0 bounds the call.
   std::unique_ptr<grpc::ClientContext> context(double deadline_s = 0) const;
 };
 
-// Adds --server and --token (with their environment variables) to a subcommand.
+// Adds --server, --token, --tls, --ca, --cert and --key (with environment variables) to a subcommand.
 void add_remote_options(CLI::App* command, Remote& remote);
 
 class CallFailed : public std::runtime_error {

@@ -69,8 +69,12 @@ std::string default_name(const std::filesystem::path& bundle) {
 std::vector<LocalFile> bundle_files(const UploadOptions& o, Declaration& declared) {
   const auto files = std::make_shared<BundleFiles>(o.inputs.front());
   if (!files->contains(kSurveyJsonFile)) throw std::runtime_error(o.inputs.front() + ": no survey.json");
-  const nlohmann::json meta = nlohmann::json::parse(read_all(*files->open(kSurveyJsonFile)), nullptr, false);
-  if (meta.is_discarded() || !meta.is_object())
+  nlohmann::json meta;
+  try {
+    meta = parse_bounded_json(read_at_most(*files->open(kSurveyJsonFile), kSurveyJsonLimits.max_bytes), kSurveyJsonLimits);
+  } catch (const std::exception&) {
+  }
+  if (!meta.is_object())
     throw std::runtime_error(o.inputs.front() + "/survey.json: not a JSON object (bathyslam inspect tells more)");
   declared = {!o.name.empty() ? o.name : meta.value("name", default_name(o.inputs.front())), meta.value("crs", ""),
               meta.value("sonar", nlohmann::json::object()), meta.value("vehicle", nlohmann::json::object())};

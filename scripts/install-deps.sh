@@ -11,6 +11,8 @@ packages=(
   libopenvdb-dev libgdal-dev gdal-bin libproj-dev proj-data proj-bin
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   nlohmann-json3-dev libcli11-dev libssl-dev zlib1g-dev libzstd-dev libtbb-dev
+  openssl  # service_tls makes its certificates at test time
+  clang libclang-rt-14-dev  # libFuzzer (scripts/fuzz-*.sh)
   python3 python3-grpcio python3-protobuf python3-gdal python3-openvdb python3-numpy
   python3-imath  # ships the PyImath library that Imath's CMake targets (via OpenVDB) reference
 )

@@ -29,6 +29,9 @@ bool DatabaseHealth::answers() {
   } catch (const std::exception& error) {
     if (serving_) log("database unreachable, health NOT_SERVING: %s", error.what());
     return false;
+  } catch (...) {  // nothing may leave the probing thread
+    if (serving_) log("database unreachable, health NOT_SERVING: unknown error");
+    return false;
   }
 }
 

@@ -5,7 +5,10 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <ctime>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <thread>
@@ -53,10 +56,54 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
   return surveys.create_tenant(name);
 }
 
-int run_token(const std::string& db, const std::string& tenant, const std::string& description) {
+struct TokenOptions {
+  std::string tenant, description, token;
+  std::int64_t id = 0;
+};
+
+int create_token(const std::string& db, const TokenOptions& t) {
+  if (t.tenant.empty()) {
+    std::fprintf(stderr, "bathyslam-server token create: --tenant is required\n");
+    return 2;
+  }
   storage::ConnectionPool pool(db, 1);
   storage::SurveyStore surveys(pool);
-  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, tenant), description).c_str());
+  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, t.tenant), t.description).c_str());
+  return 0;
+}
+
+int revoke_token(const std::string& db, const TokenOptions& t) {
+  if ((t.id > 0) == !t.token.empty()) {
+    std::fprintf(stderr, "bathyslam-server token revoke: give either --id (from token list) or --token\n");
+    return 2;
+  }
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  if (t.id > 0 ? surveys.revoke_token(t.id) : surveys.revoke_token(t.token)) {
+    std::printf("revoked\n");
+    return 0;
+  }
+  std::fprintf(stderr, "bathyslam-server token revoke: no such token, or revoked already\n");
+  return 1;
+}
+
+std::string utc(double seconds) {
+  const std::time_t time = static_cast<std::time_t>(seconds);
+  std::tm tm{};
+  gmtime_r(&time, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+int list_tokens(const std::string& db, const TokenOptions& t) {
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  std::printf("%6s  %-20s  %-20s  %-20s  %s\n", "id", "tenant", "created", "revoked", "description");
+  for (const storage::TokenInfo& token : surveys.list_tokens(t.tenant.empty() ? std::nullopt : std::optional(t.tenant)))
+    std::printf("%6lld  %-20s  %-20s  %-20s  %s\n", static_cast<long long>(token.id), token.tenant.c_str(),
+                utc(token.created_at).c_str(), token.revoked_at ? utc(*token.revoked_at).c_str() : "-",
+                token.description.c_str());
   return 0;
 }
 
@@ -68,8 +115,31 @@ struct ServeOptions {
   std::string dev_tenant;
   std::string scratch;
   int lease_seconds = 30;
+  int statement_timeout_seconds = 60;
+  std::string tls_cert, tls_key, tls_client_ca;  // PEM files; no certificate: plaintext
   service::Limits limits;
 };
+
+std::string read_pem(const std::string& option, const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(option + ": cannot read " + path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// TLS when a certificate is given; with a client CA, clients must present a certificate it signed.
+std::shared_ptr<grpc::ServerCredentials> server_credentials(const ServeOptions& o) {
+  if (o.tls_cert.empty() != o.tls_key.empty()) throw std::runtime_error("--tls-cert and --tls-key go together");
+  if (o.tls_cert.empty()) {
+    if (!o.tls_client_ca.empty()) throw std::runtime_error("--tls-client-ca needs --tls-cert and --tls-key");
+    return grpc::InsecureServerCredentials();
+  }
+  grpc::SslServerCredentialsOptions options(o.tls_client_ca.empty()
+                                                ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                                : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+  options.pem_key_cert_pairs.push_back({read_pem("--tls-key", o.tls_key), read_pem("--tls-cert", o.tls_cert)});
+  if (!o.tls_client_ca.empty()) options.pem_root_certs = read_pem("--tls-client-ca", o.tls_client_ca);
+  return grpc::SslServerCredentials(options);
+}
 
 int serve(const ServeOptions& o) {
   // Block the stop signals before any thread starts, so every thread inherits the mask; one
@@ -80,7 +150,8 @@ int serve(const ServeOptions& o) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers));
+  storage::ConnectionPool pool(o.db, static_cast<std::size_t>(8 + 2 * o.workers),
+                               {.statement_timeout = std::chrono::seconds(o.statement_timeout_seconds)});
   storage::SurveyStore surveys(pool);
   storage::JobQueue jobs(pool, {std::chrono::seconds(o.lease_seconds), std::chrono::seconds(5)});
   storage::ResultStore results(pool);
@@ -98,7 +169,7 @@ int serve(const ServeOptions& o) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(o.listen, server_credentials(o), &port);
   builder.RegisterService(&survey_service);
   builder.RegisterService(&job_service);
   builder.RegisterService(&map_service);
@@ -112,7 +183,11 @@ int serve(const ServeOptions& o) {
   gethostname(host, sizeof host - 1);
   service::Scheduler scheduler(surveys, jobs, results,
                               {.workers = o.workers, .name = std::string(host) + ":" + std::to_string(getpid()),
-                               .scratch = scratch});
+                               .scratch = scratch,
+                               // Three heartbeats per lease: one lost to a slow database does not lose the job.
+                               .heartbeat = std::min<std::chrono::milliseconds>(std::chrono::seconds(5),
+                                                                                std::chrono::seconds(o.lease_seconds) / 3),
+                               .retry = {}, .max_map_cells = o.limits.max_map_cells});
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::thread stopper([&] {
@@ -157,18 +232,37 @@ int main(int argc, char** argv) {
   app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));
+  app.add_option("--tls-cert", o.tls_cert, "PEM certificate (chain): serve TLS")->envname("BATHYSLAM_TLS_CERT");
+  app.add_option("--tls-key", o.tls_key, "PEM private key of --tls-cert")->envname("BATHYSLAM_TLS_KEY");
+  app.add_option("--tls-client-ca", o.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
+  app.add_option("--statement-timeout", o.statement_timeout_seconds,
+                 "seconds after which PostgreSQL cancels a statement of a request or a job")
+      ->capture_default_str()->check(CLI::Range(1, 3600));
   app.add_option("--max-file-bytes", o.limits.max_file_bytes, "largest uploaded file")->capture_default_str();
+  app.add_option("--max-map-cells", o.limits.max_map_cells, "cells of one survey's map at 0.5 m; larger surveys are refused")
+      ->capture_default_str();
   app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")
       ->capture_default_str()->check(CLI::Range(1, 10));
   CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");
   add_db_option(migrate);  // `migrate --db ...` as well as `--db ... migrate`
-  CLI::App* token = app.add_subcommand("token", "issue an API token for a tenant (created if needed) and print it");
+  CLI::App* token = app.add_subcommand("token", "API tokens: create (the default), revoke, list");
   add_db_option(token);
-  std::string tenant, description;
-  token->add_option("--tenant", tenant, "tenant name")->required();
-  token->add_option("--description", description, "what the token is for");
+  TokenOptions t;
+  token->add_option("--tenant", t.tenant, "tenant name (token --tenant NAME: the same as token create)");
+  token->add_option("--description", t.description, "what the token is for");
+  CLI::App* create = token->add_subcommand("create", "issue a token for a tenant (created if needed) and print it");
+  add_db_option(create);
+  create->add_option("--tenant", t.tenant, "tenant name")->required();
+  create->add_option("--description", t.description, "what the token is for");
+  CLI::App* revoke = token->add_subcommand("revoke", "revoke a token: it is refused from now on");
+  add_db_option(revoke);
+  revoke->add_option("--id", t.id, "the token's id, from token list");
+  revoke->add_option("--token", t.token, "the token itself");
+  CLI::App* list = token->add_subcommand("list", "every token (never the secret), or a tenant's");
+  add_db_option(list);
+  list->add_option("--tenant", t.tenant, "only this tenant's");
   CLI11_PARSE(app, argc, argv);
   if (o.db.empty()) {
     std::fprintf(stderr, "bathyslam-server: no database; pass --db or set BATHYSLAM_DB\n");
@@ -180,7 +274,9 @@ int main(int argc, char** argv) {
       storage::Connection connection(o.db);
       storage::ensure_schema(connection, o.migrate);
     }
-    if (*token) return run_token(o.db, tenant, description);
+    if (*revoke) return revoke_token(o.db, t);
+    if (*list) return list_tokens(o.db, t);
+    if (*token) return create_token(o.db, t);
     return serve(o);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "bathyslam-server: %s\n", error.what());

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/io/bounded_json.h"
 #include "core/io/byte_source.h"
 #include "core/io/problem.h"
 #include "core/types/survey.h"
@@ -18,6 +19,10 @@ inline constexpr std::string_view kSurveyJsonFile = "survey.json";
 inline constexpr std::string_view kNavFile = "nav.csv";
 inline constexpr std::string_view kPingsFile = "pings.csv";
 inline constexpr std::string_view kReferenceNavFile = "reference_nav.csv";
+
+// survey.json describes the survey; its free-form "sonar" and "vehicle" need neither megabytes
+// nor deep nesting.
+inline constexpr JsonLimits kSurveyJsonLimits{.max_bytes = 1 << 20, .max_depth = 64};
 
 inline constexpr std::string_view kNavHeader = "time,easting,northing,depth,roll,pitch,heading";
 inline constexpr std::string_view kPingsHeader = "time,beam,along,across,down";

@@ -3,11 +3,13 @@
 #include <cmath>
 #include <memory>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 
 #include "core/io/bundle.h"
 
+#include "core/io/bounded_json.h"
 #include "core/io/bundle_files.h"
 #include "core/io/crs.h"
 #include "core/io/csv.h"
@@ -83,9 +85,12 @@ SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
   SurveyMetadata metadata;
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(text);
+    doc = parse_bounded_json(text, kSurveyJsonLimits);
   } catch (const nlohmann::json::parse_error& e) {
     problems.error(name, line_of_byte(text, e.byte), "", std::string("not valid JSON: ") + e.what());
+    return metadata;
+  } catch (const JsonLimitError& e) {
+    problems.error(name, 0, "", e.what());
     return metadata;
   }
   if (!doc.is_object()) {
@@ -265,18 +270,26 @@ BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   };
 
   if (auto json = open(kSurveyJsonFile, true)) {
-    survey.metadata = parse_survey_json(read_all(*json), kSurveyJsonFile, problems);
+    survey.metadata = parse_survey_json(read_at_most(*json, kSurveyJsonLimits.max_bytes), kSurveyJsonFile, problems);
   }
+  // A line too long ends the reading of its file with a problem at that line.
+  auto guarded = [&](std::string_view file, const std::function<void()>& parse) {
+    try {
+      parse();
+    } catch (const LineTooLong& e) {
+      problems.error(std::string(file), e.line(), "", e.what());
+    }
+  };
   std::optional<TimeSpan> nav_span;
   if (auto nav = open(kNavFile, true)) {
-    survey.nav = parse_nav_csv(*nav, kNavFile, problems);
+    guarded(kNavFile, [&] { survey.nav = parse_nav_csv(*nav, kNavFile, problems); });
     if (survey.nav.size() >= 2) nav_span = TimeSpan{survey.nav.front().time, survey.nav.back().time};
   }
   if (auto pings = open(kPingsFile, true)) {
-    parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams);
+    guarded(kPingsFile, [&] { parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams); });
   }
   if (auto reference = open(kReferenceNavFile, false)) {
-    survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems);
+    guarded(kReferenceNavFile, [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems); });
   }
 
   BundleReadResult result;

@@ -49,4 +49,15 @@ std::string read_all(ByteSource& source) {
   return out;
 }
 
+std::string read_at_most(ByteSource& source, std::size_t max_bytes) {
+  std::string out;
+  char buffer[1 << 16];
+  while (out.size() <= max_bytes) {
+    const std::size_t n = source.read(buffer, std::min(sizeof buffer, max_bytes + 1 - out.size()));
+    if (n == 0) break;
+    out.append(buffer, n);
+  }
+  return out;
+}
+
 }  // namespace bathyslam

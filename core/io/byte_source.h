@@ -44,5 +44,8 @@ std::size_t read_fully(ByteSource& source, char* buffer, std::size_t size);
 
 // Reads a whole source into a string (for small files such as survey.json).
 std::string read_all(ByteSource& source);
+// The same, but stops after `max_bytes` + 1 bytes: enough to tell that the source is too large
+// without holding all of it.
+std::string read_at_most(ByteSource& source, std::size_t max_bytes);
 
 }  // namespace bathyslam

@@ -4,13 +4,18 @@
 
 namespace bathyslam {
 
-LineReader::LineReader(ByteSource& source, std::size_t block_size)
-    : source_(source), buffer_(block_size) {}
+LineTooLong::LineTooLong(std::size_t line, std::size_t max_bytes)
+    : std::runtime_error("line longer than " + std::to_string(max_bytes) + " bytes; the rest of the file was not read"),
+      line_(line) {}
+
+LineReader::LineReader(ByteSource& source, std::size_t block_size, std::size_t max_line_bytes)
+    : source_(source), max_line_bytes_(max_line_bytes), buffer_(block_size) {}
 
 bool LineReader::refill() {
   if (eof_) return false;
   // Keep the unfinished line, then fill the rest of the buffer.
   const std::size_t carried = end_ - begin_;
+  if (carried > max_line_bytes_ + 1) throw LineTooLong(line_number_ + 1, max_line_bytes_);  // + 1: a '\r'
   if (carried == buffer_.size()) buffer_.resize(buffer_.size() * 2);  // a very long line
   std::memmove(buffer_.data(), buffer_.data() + begin_, carried);
   begin_ = 0;
@@ -29,6 +34,7 @@ bool LineReader::next(std::string_view& line) {
       std::size_t length = static_cast<std::size_t>(newline - start);
       begin_ += length + 1;
       if (length > 0 && start[length - 1] == '\r') --length;
+      if (length > max_line_bytes_) throw LineTooLong(line_number_ + 1, max_line_bytes_);
       line = {start, length};
       ++line_number_;
       return true;
@@ -40,6 +46,7 @@ bool LineReader::next(std::string_view& line) {
       const char* last = buffer_.data() + begin_;
       begin_ = end_;
       if (last[length - 1] == '\r') --length;
+      if (length > max_line_bytes_) throw LineTooLong(line_number_ + 1, max_line_bytes_);
       line = {last, length};
       ++line_number_;
       return true;

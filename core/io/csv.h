@@ -7,6 +7,8 @@
 #include <cstddef>
 #include <memory>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
@@ -15,9 +17,24 @@
 
 namespace bathyslam {
 
+// A line longer than the reader allows: a file that is no table of numbers (or a hostile one
+// without a newline, which would otherwise be held in memory whole).
+class LineTooLong : public std::runtime_error {
+ public:
+  LineTooLong(std::size_t line, std::size_t max_bytes);
+  std::size_t line() const { return line_; }
+
+ private:
+  std::size_t line_;
+};
+
 class LineReader {
  public:
-  explicit LineReader(ByteSource& source, std::size_t block_size = 4 << 20);
+  // A bundle's rows are under 200 bytes; 64 KiB leaves room for anything legitimate.
+  static constexpr std::size_t kMaxLineBytes = 64 << 10;
+
+  // Throws LineTooLong from next() at a line over `max_line_bytes`.
+  explicit LineReader(ByteSource& source, std::size_t block_size = 4 << 20, std::size_t max_line_bytes = kMaxLineBytes);
 
   // The next line without its line ending ("\n" or "\r\n"); false at the end of input.
   bool next(std::string_view& line);
@@ -28,6 +45,7 @@ class LineReader {
   bool refill();
 
   ByteSource& source_;
+  std::size_t max_line_bytes_;
   std::vector<char> buffer_;
   std::size_t begin_ = 0;  // first unread byte in buffer_
   std::size_t end_ = 0;    // one past the last valid byte in buffer_

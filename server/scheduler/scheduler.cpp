@@ -6,9 +6,11 @@
 #include <mutex>
 
 #include "core/pipeline/pipeline.h"
+#include "core/fuse/map_extent.h"
 #include "core/pipeline/report.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
+#include "server/scheduler/retry.h"
 #include "server/scratch_dir.h"
 #include "server/storage/stored_bundle.h"
 
@@ -21,20 +23,29 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // Watches a running job from its own thread: sets `cancel` when the job is no longer this
-// worker's (cancelled, deleted, lease reaped) or the server stops, and renews the lease.
+// worker's (cancelled, deleted, lease reaped) or the server stops, and renews the lease. Nothing
+// it meets ends the thread (an exception escaping a thread ends the process): while the
+// database is away it keeps the job running and the lease decides.
 class JobWatcher {
  public:
   JobWatcher(storage::JobQueue& jobs, const storage::Lease& lease, const SchedulerOptions& options,
              const std::atomic<bool>& stopping, std::atomic<bool>& cancel)
       : thread_([&, lease] {
+          const std::string job = "job " + std::to_string(lease.job_id);
+          FailureStreak poll(job + ": state poll"), heartbeat(job + ": heartbeat");
           auto last_heartbeat = Clock::now();
           std::unique_lock lock(mutex_);
           while (!done_) {
-            if (stopping || !still_ours(jobs, lease)) {
+            if (stopping || !still_ours(jobs, lease, poll)) {
               cancel = true;
             } else if (Clock::now() - last_heartbeat >= options.heartbeat) {
-              if (!jobs.heartbeat(lease)) cancel = true;
-              last_heartbeat = Clock::now();
+              try {
+                if (!jobs.heartbeat(lease)) cancel = true;
+                heartbeat.succeeded();
+                last_heartbeat = Clock::now();
+              } catch (const std::exception& error) {
+                heartbeat.failed(error.what());  // tried again at the next poll
+              }
             }
             wake_.wait_for(lock, options.state_poll);
           }
@@ -49,14 +60,15 @@ class JobWatcher {
   }
 
  private:
-  static bool still_ours(storage::JobQueue& jobs, const storage::Lease& lease) {
+  static bool still_ours(storage::JobQueue& jobs, const storage::Lease& lease, FailureStreak& poll) {
     try {
       const storage::JobStatus status = jobs.status(lease.job_id);
+      poll.succeeded();
       return status.state == storage::JobState::kRunning && status.worker == lease.worker && status.attempts == lease.attempt;
     } catch (const std::out_of_range&) {
       return false;  // deleted with its survey
-    } catch (const storage::DatabaseError& error) {
-      log("job %lld: state poll failed: %s", static_cast<long long>(lease.job_id), error.what());
+    } catch (const std::exception& error) {
+      poll.failed(error.what());
       return true;  // the database may come back; the lease decides
     }
   }
@@ -115,7 +127,10 @@ void Scheduler::work(const std::string& worker) {
       if (auto job = jobs_.wait_for_job(worker, std::chrono::seconds(1))) run(*job);
     } catch (const std::exception& error) {
       log("%s: %s; retrying in 1 s", worker.c_str(), error.what());
-      std::this_thread::sleep_for(std::chrono::seconds(1));
+      sleep_unless(stopping_, std::chrono::seconds(1));
+    } catch (...) {
+      log("%s: unknown exception; retrying in 1 s", worker.c_str());
+      sleep_unless(stopping_, std::chrono::seconds(1));
     }
   }
 }
@@ -133,24 +148,82 @@ void Scheduler::release(const storage::Lease& lease, double seconds) {
   }
 }
 
+// Gives the job back after the database stayed away longer than the retries; if even that
+// cannot reach the database, the lease expires and the reaper of any server re-queues it.
+void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error) {
+  const long long id = lease.job_id;
+  try {
+    if (jobs_.requeue_after_outage(lease))
+      log("job %lld: database unavailable after %.1f s (%s); given back to the queue", id, seconds, error.c_str());
+    else log("job %lld: database unavailable after %.1f s (%s); no longer ours", id, seconds, error.c_str());
+  } catch (const std::exception& again) {
+    log("job %lld: database unavailable after %.1f s (%s); its lease will expire", id, seconds, again.what());
+  }
+}
+
+// What each stage produced, in the order of the pipeline. Everything an earlier try stored is
+// discarded first, so that the whole sequence can run again after a transient failure.
+void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
+                      const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
+  const std::int64_t id = job.lease.job_id;
+  storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
+  constexpr int kStores = 5;
+  int stored = 0;
+  auto step = [&](const char* what, const std::function<void()>& save) {
+    if (cancel) throw Cancelled();
+    event(what, static_cast<double>(stored++) / kStores);
+    save();
+  };
+  step("submaps", [&] {
+    results.discard(id);  // whatever an earlier attempt or try stored before it was stopped
+    results.save_origin(id, result.submaps.origin);
+    results.save_submaps(id, result.submaps.submaps);
+  });
+  step("constraints", [&] { results.save_constraints(id, result.constraints); });
+  step("optimized poses", [&] { results.save_optimized_poses(id, result.optimized_poses); });
+  step("tiles", [&] {
+    for (const auto& [key, bytes] : map.tiles) results.put_tile(id, key, bytes);
+    if (map.grid.levels > 0) results.save_map_grid(id, map.grid);
+  });
+  step("report", [&] {
+    storage::Report report = report_with_plots(result, options_.scratch);
+    report.plots.insert(map.plots.begin(), map.plots.end());
+    results.save_report(id, report);
+  });
+}
+
 void Scheduler::run(const storage::ClaimedJob& job) {
   const storage::Lease& lease = job.lease;
   const long long id = lease.job_id;
+  const std::string name = "job " + std::to_string(id);
   const auto start = Clock::now();
   log("job %lld: claimed by %s (attempt %d): survey %lld, %s", id, lease.worker.c_str(), lease.attempt,
       static_cast<long long>(job.survey_id), job.configuration.c_str());
   std::atomic<bool> cancel{false};
   JobWatcher watcher(jobs_, lease, options_, stopping_, cancel);
-  auto event = [&](const std::string& stage, double progress, const std::string& message = "") {
-    jobs_.record_event(lease, stage, std::clamp(progress, 0.0, 1.0), message);
+  // Progress events are for watchers: one lost while the database is away costs nothing, and
+  // an exception must not leave the progress callback (the pipeline calls it mid-stage).
+  FailureStreak events(name + ": progress events");
+  auto event = [&](const std::string& stage, double progress, const std::string& message = "") noexcept {
+    try {
+      jobs_.record_event(lease, stage, std::clamp(progress, 0.0, 1.0), message);
+      events.succeeded();
+    } catch (const std::exception& error) {
+      events.failed(error.what());
+    }
   };
   try {
     // Registrations share the machine's cores among the workers.
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     const PipelineConfig config = job_config(job, std::max(1, cores / std::max(1, options_.workers)));
     event("load", 0);
-    BundleReadResult bundle = storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
+    BundleReadResult bundle = retry_transient(name + ": loading the survey", options_.retry, cancel, [&] {
+      return storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
+    });
     if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+    // Finalize checked this too; a survey finalized before the limit existed is checked here.
+    if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, options_.max_map_cells))
+      throw std::runtime_error(problem->to_string());
     event("load", 1, std::to_string(bundle.survey->pings.size()) + " pings");
 
     // Progress: every stage change, and within a stage at most every `progress_every`.
@@ -167,50 +240,48 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         },
         &cancel);
 
-    // What each stage produced, in the order of the pipeline, each in its own transaction.
-    constexpr int kStores = 5;
-    int stored = 0;
-    auto store = [&](const char* what, const std::function<void()>& save) {
-      if (cancel) throw Cancelled();
-      event("store", static_cast<double>(stored++) / kStores, what);
-      save();
-    };
-    store("submaps", [&] {
-      results_.discard(id);  // whatever an earlier attempt stored before it was stopped
-      results_.save_origin(id, result.submaps.origin);
-      results_.save_submaps(id, result.submaps.submaps);
-    });
-    store("constraints", [&] { results_.save_constraints(id, result.constraints); });
-    store("optimized poses", [&] { results_.save_optimized_poses(id, result.optimized_poses); });
     event("map", 0, "fusing and tiling");
     const MapProducts map = make_map_products(result, bundle.survey->metadata, FuseConfig{}, options_.scratch);
-    store("tiles", [&] {
-      for (const auto& [key, bytes] : map.tiles) results_.put_tile(id, key, bytes);
-      if (map.grid.levels > 0) results_.save_map_grid(id, map.grid);
-    });
-    store("report", [&] {
-      storage::Report report = report_with_plots(result, options_.scratch);
-      report.plots.insert(map.plots.begin(), map.plots.end());
-      results_.save_report(id, report);
+    retry_transient(name + ": storing results", options_.retry, cancel, [&] {
+      store(job, result, map, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);
-    if (jobs_.succeed(lease)) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
+    if (retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); }))
+      log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
+  } catch (const storage::LeaseLost& error) {
+    log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
   } catch (const Cancelled&) {
     if (stopping_) {
       release(lease, seconds_since(start));
     } else {
       log("job %lld: stopped after %.1f s (cancelled or no longer ours)", id, seconds_since(start));
     }
+  } catch (const storage::DatabaseError& error) {
+    if (stopping_) release(lease, seconds_since(start));
+    else if (error.transient()) requeue_after_outage(lease, seconds_since(start), error.what());
+    else fail(lease, seconds_since(start), error.what());
   } catch (const std::exception& error) {
     if (stopping_) {
       release(lease, seconds_since(start));
     } else if (cancel) {
       log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
     } else {
-      log("job %lld: failed after %.1f s: %s", id, seconds_since(start), error.what());
-      jobs_.fail(lease, error.what());
+      fail(lease, seconds_since(start), error.what());
     }
+  }
+}
+
+// A failure of the job itself (its input, its parameters): final, since the same input would
+// fail the same way. Recording it retries through a short outage; after that the lease expires.
+void Scheduler::fail(const storage::Lease& lease, double seconds, const std::string& error) {
+  log("job %lld: failed after %.1f s: %s", static_cast<long long>(lease.job_id), seconds, error.c_str());
+  try {
+    retry_transient("job " + std::to_string(lease.job_id) + ": recording its failure", options_.retry, stopping_,
+                    [&] { return jobs_.fail(lease, error); });
+  } catch (const std::exception& again) {
+    log("job %lld: could not record the failure (%s); its lease will expire", static_cast<long long>(lease.job_id),
+        again.what());
   }
 }
 

@@ -5,11 +5,14 @@
 // the lease.
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "server/scheduler/map_products.h"
+#include "server/scheduler/retry.h"
 #include "server/storage/job_queue.h"
 #include "server/storage/result_store.h"
 #include "server/storage/survey_store.h"
@@ -23,6 +26,8 @@ struct SchedulerOptions {
   std::chrono::milliseconds state_poll{200};       // how soon a cancellation is noticed
   std::chrono::milliseconds heartbeat{5'000};      // well within the queue's lease
   std::chrono::milliseconds progress_every{500};   // at most one progress event per stage this often
+  RetryPolicy retry;                               // storing results through a database outage
+  std::uint64_t max_map_cells = 100'000'000;       // a larger map is refused before fusion
 };
 
 class Scheduler {
@@ -41,7 +46,11 @@ class Scheduler {
  private:
   void work(const std::string& worker);
   void run(const storage::ClaimedJob& job);
+  void store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
+             const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
+  void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error);
+  void fail(const storage::Lease& lease, double seconds, const std::string& error);
 
   storage::SurveyStore& surveys_;
   storage::JobQueue& jobs_;

@@ -39,6 +39,17 @@ void JobEventBell::wait(std::int64_t job_id, std::uint64_t seen, std::chrono::mi
 }
 
 void JobEventBell::listen() {
+  try {
+    listen_until_stopped();
+  } catch (const std::exception& error) {  // an exception leaving a thread ends the process
+    log("job events: listening stopped (%s); watchers fall back to polling", error.what());
+  } catch (...) {
+    log("job events: listening stopped; watchers fall back to polling");
+  }
+  rang_.notify_all();
+}
+
+void JobEventBell::listen_until_stopped() {
   std::unique_ptr<storage::Connection> connection;
   bool reported = false;
   while (true) {
@@ -68,7 +79,6 @@ void JobEventBell::listen() {
     }
     rang_.notify_all();
   }
-  rang_.notify_all();
 }
 
 }  // namespace bathyslam::server

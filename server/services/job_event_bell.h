@@ -27,6 +27,7 @@ class JobEventBell {
 
  private:
   void listen();
+  void listen_until_stopped();
 
   std::string conninfo_;
   std::mutex mutex_;

@@ -101,13 +101,14 @@ grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJo
     if (!survey.ready)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
                     "survey_id: survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
-    const int active = context_.jobs.active_jobs(tenant);
-    if (active >= context_.limits.max_active_jobs)
-      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                    std::to_string(active) + " jobs are queued or running; the limit is " +
-                        std::to_string(context_.limits.max_active_jobs));
     storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts};
-    const std::int64_t id = context_.jobs.enqueue(job);
+    const std::optional<std::int64_t> queued =
+        context_.jobs.enqueue_within_limit(job, tenant, context_.limits.max_active_jobs);
+    if (!queued)
+      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                    std::to_string(context_.limits.max_active_jobs) + " jobs are queued or running; the limit is " +
+                        std::to_string(context_.limits.max_active_jobs));
+    const std::int64_t id = *queued;
     log("job %lld queued: survey %lld, %s, %d overrides", static_cast<long long>(id), static_cast<long long>(survey.id),
         job.configuration.c_str(), request->parameters_size());
     describe(*context_.jobs.job(id), reply);

@@ -67,6 +67,9 @@ grpc::Status handle(const char* method, grpc::ServerContext* call, const std::fu
   } catch (const std::exception& error) {
     log("%s: %s", method, error.what());
     return grpc::Status(grpc::StatusCode::INTERNAL, error.what());
+  } catch (...) {  // gRPC's thread would end the process
+    log("%s: unknown exception", method);
+    return grpc::Status(grpc::StatusCode::INTERNAL, "unknown error");
   }
 }
 

@@ -1,5 +1,8 @@
 #include "server/services/survey_service.h"
 
+#include "core/fuse/fuse.h"
+#include "core/fuse/map_extent.h"
+#include "core/io/bounded_json.h"
 #include "core/io/crs.h"
 #include "core/summary/survey_summary.h"
 #include "server/log.h"
@@ -15,10 +18,18 @@ constexpr std::size_t kMaxChunkBytes = 1 << 20;
 // GetSurvey lists them all.
 constexpr std::size_t kProblemsInStatus = 40;
 
+// The free-form "sonar" and "vehicle" objects: as survey.json allows them (they come from it).
 nlohmann::json object_field(const std::string& field, const std::string& text) {
   if (text.empty()) return nlohmann::json::object();
-  nlohmann::json value = nlohmann::json::parse(text, nullptr, false);
-  if (value.is_discarded() || !value.is_object()) throw invalid(field, "must be a JSON object");
+  nlohmann::json value;
+  try {
+    value = parse_bounded_json(text, kSurveyJsonLimits);
+  } catch (const JsonLimitError& error) {
+    throw invalid(field, error.what());
+  } catch (const nlohmann::json::parse_error&) {
+    throw invalid(field, "must be a JSON object");
+  }
+  if (!value.is_object()) throw invalid(field, "must be a JSON object");
   return value;
 }
 
@@ -109,10 +120,22 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     if (!storage::is_bundle_file(name))
       throw invalid("file_name", "'" + name + "' is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
     if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
+    if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
+    // The first chunk is checked before the upload is declared, so that a refused stream leaves
+    // nothing behind; later ones are checked as they come (what came before them stays).
+    if (message.offset() < 0) throw invalid("offset", "must not be negative");
+    if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
+    if (message.offset() + static_cast<std::int64_t>(message.data().size()) > message.size_bytes())
+      throw invalid("data", "'" + name + "' was declared " + std::to_string(message.size_bytes()) +
+                                " bytes; this chunk would end at " +
+                                std::to_string(message.offset() + static_cast<std::int64_t>(message.data().size())));
     if (message.size_bytes() > context_.limits.max_file_bytes)
       throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
                                                               " is over this server's limit of " +
                                                               std::to_string(context_.limits.max_file_bytes));
+    if (name == kSurveyJsonFile && message.size_bytes() > static_cast<std::int64_t>(kSurveyJsonLimits.max_bytes))
+      throw invalid("size_bytes", "survey.json is at most " + std::to_string(kSurveyJsonLimits.max_bytes) + " bytes, not " +
+                                      std::to_string(message.size_bytes()));
     storage::Sha256 digest{};
     std::copy(message.sha256().begin(), message.sha256().end(), digest.begin());
     try {
@@ -150,7 +173,8 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     if (survey.ready) return describe(survey, true, reply);  // finalizing twice changes nothing
     nlohmann::json problems = nlohmann::json::array();
     bool errors = false;
-    for (const storage::UploadState& upload : context_.surveys.uploads(survey.id)) {
+    const std::vector<storage::UploadState> uploads = context_.surveys.uploads(survey.id);  // what is validated
+    for (const storage::UploadState& upload : uploads) {
       if (upload.complete) continue;
       problems.push_back(to_json({Problem::Severity::kError, upload.name, 0, "",
                                   "upload incomplete: " + std::to_string(upload.committed_bytes) + " of " +
@@ -167,9 +191,17 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
                                   "'" + bundle.survey->metadata.crs + "' but the survey was created with '" + survey.crs + "'"}));
       errors = true;
     }
+    if (bundle.survey) {
+      if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, context_.limits.max_map_cells)) {
+        problems.push_back(to_json(*problem));
+        errors = true;
+      }
+    }
     storage::Validation validation{!errors, problems, nullptr};
     if (!errors && bundle.survey) validation.summary = to_json(summarize(*bundle.survey));
-    context_.surveys.save_validation(survey.id, validation);
+    if (!context_.surveys.save_validation_if_unchanged(survey.id, validation, uploads))
+      throw Refusal(grpc::StatusCode::ABORTED, "survey " + std::to_string(survey.id) +
+                                                   ": its files changed while it was validated; finalize it again");
     log("survey %lld finalized: %s, %zu problems", static_cast<long long>(survey.id), errors ? "invalid" : "ready",
         problems.size());
     if (errors) {

@@ -44,6 +44,14 @@ DatabaseError::DatabaseError(std::string sqlstate, const std::string& message)
     : std::runtime_error("database error " + sqlstate + ": " + message), sqlstate_(std::move(sqlstate)),
       message_(message) {}
 
+bool DatabaseError::transient() const {
+  const std::string_view state = sqlstate_;
+  return state.starts_with("08")                                          // connection exception
+         || state.starts_with("53")                                       // insufficient resources
+         || state == "57P01" || state == "57P02" || state == "57P03"      // shutdown, cannot connect now
+         || state == "40001" || state == "40P01";                         // serialization failure, deadlock
+}
+
 Param::Param(double value) : value_(shortest(value)) {}
 
 std::string float8_array(const double* values, std::size_t count) {
@@ -122,16 +130,18 @@ namespace {
 
 // A connection string with a default connect_timeout of 10 s, which the string's own overrides:
 // without one, a database host that drops packets holds a worker, or the health probe, for
-// minutes of TCP retries.
-PGconn* connect_with_timeout(const std::string& conninfo) {
-  const char* keywords[] = {"connect_timeout", "dbname", nullptr};
-  const char* values[] = {"10", conninfo.c_str(), nullptr};
+// minutes of TCP retries. The statement timeout goes the same way, as a default server option.
+PGconn* connect_with_timeout(const std::string& conninfo, std::chrono::milliseconds statement_timeout) {
+  const std::string options = "-c statement_timeout=" + std::to_string(statement_timeout.count());
+  const char* keywords[] = {"connect_timeout", "options", "dbname", nullptr};
+  const char* values[] = {"10", statement_timeout.count() > 0 ? options.c_str() : "", conninfo.c_str(), nullptr};
   return PQconnectdbParams(keywords, values, /*expand_dbname=*/1);
 }
 
 }  // namespace
 
-Connection::Connection(const std::string& conninfo) : conn_(connect_with_timeout(conninfo), &PQfinish) {
+Connection::Connection(const std::string& conninfo, std::chrono::milliseconds statement_timeout)
+    : conn_(connect_with_timeout(conninfo, statement_timeout), &PQfinish) {
   if (!conn_ || PQstatus(conn_.get()) != CONNECTION_OK) throw connection_error(conn_.get());
   // Server notices (e.g. "relation already exists, skipping") are not errors; keep stderr clean.
   PQsetNoticeProcessor(conn_.get(), [](void*, const char*) {}, nullptr);
@@ -214,10 +224,11 @@ PooledConnection::~PooledConnection() {
   if (connection_) pool_->release(std::move(connection_));
 }
 
-ConnectionPool::ConnectionPool(std::string conninfo, std::size_t size) : conninfo_(std::move(conninfo)), size_(size) {
+ConnectionPool::ConnectionPool(std::string conninfo, std::size_t size, PoolOptions options)
+    : conninfo_(std::move(conninfo)), size_(size), options_(options) {
   if (size_ == 0) throw std::invalid_argument("connection pool: size must be at least 1");
   // Fail at start, not at the first request, when the database is unreachable.
-  release(std::make_unique<Connection>(conninfo_));
+  release(std::make_unique<Connection>(conninfo_, options_.statement_timeout));
   opened_ = 1;
 }
 
@@ -225,7 +236,10 @@ PooledConnection ConnectionPool::acquire() {
   std::unique_ptr<Connection> connection;
   {
     std::unique_lock lock(mutex_);
-    returned_.wait(lock, [&] { return !idle_.empty() || opened_ < size_; });
+    if (!returned_.wait_for(lock, options_.acquire_timeout, [&] { return !idle_.empty() || opened_ < size_; }))
+      throw DatabaseError("53300", "no database connection came free within " +
+                                       std::to_string(options_.acquire_timeout.count()) + " ms (all " +
+                                       std::to_string(size_) + " of the pool are in use)");
     if (!idle_.empty()) {
       connection = std::move(idle_.back());
       idle_.pop_back();
@@ -237,7 +251,7 @@ PooledConnection ConnectionPool::acquire() {
     if (connection) {
       connection->ensure_alive();
     } else {
-      connection = std::make_unique<Connection>(conninfo_);
+      connection = std::make_unique<Connection>(conninfo_, options_.statement_timeout);
     }
   } catch (...) {
     std::lock_guard lock(mutex_);

@@ -25,6 +25,9 @@ class DatabaseError : public std::runtime_error {
   DatabaseError(std::string sqlstate, const std::string& message);
   const std::string& sqlstate() const { return sqlstate_; }
   const std::string& message() const { return message_; }  // PostgreSQL's own words
+  // The same statement may succeed if tried again later: the connection was lost, the server is
+  // shutting down or starting, out of connections, or the transaction lost a serialization race.
+  bool transient() const;
 
  private:
   std::string sqlstate_;
@@ -87,7 +90,9 @@ class Result {
 
 class Connection {
  public:
-  explicit Connection(const std::string& conninfo);
+  // `statement_timeout` (0: PostgreSQL's default, none) ends any statement that runs longer,
+  // with SQLSTATE 57014; a connection string that sets its own options keeps them.
+  explicit Connection(const std::string& conninfo, std::chrono::milliseconds statement_timeout = {});
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
 
@@ -126,11 +131,20 @@ class PooledConnection {
   std::unique_ptr<Connection> connection_;
 };
 
+struct PoolOptions {
+  // No statement of a request or a job needs minutes; one that does is stuck on a lock or a
+  // runaway plan, and holds a connection every other caller needs.
+  std::chrono::milliseconds statement_timeout{60'000};
+  // How long acquire() waits for a connection to come back when all are lent out.
+  std::chrono::milliseconds acquire_timeout{10'000};
+};
+
 // A few connections shared by threads. Connections open lazily, up to `size`; acquire() waits
-// for one to come back when all are lent out.
+// for one to come back when all are lent out, up to `acquire_timeout`, and then throws a
+// DatabaseError with SQLSTATE 53300 (too many connections: transient, so callers may retry).
 class ConnectionPool {
  public:
-  ConnectionPool(std::string conninfo, std::size_t size);
+  ConnectionPool(std::string conninfo, std::size_t size, PoolOptions options = {});
   PooledConnection acquire();
   const std::string& conninfo() const { return conninfo_; }
 
@@ -140,6 +154,7 @@ class ConnectionPool {
 
   std::string conninfo_;
   std::size_t size_;
+  PoolOptions options_;
   std::size_t opened_ = 0;
   std::vector<std::unique_ptr<Connection>> idle_;
   std::mutex mutex_;

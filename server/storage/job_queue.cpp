@@ -24,6 +24,16 @@ std::string with_lease(std::string_view head, std::string_view tail = "") {
 
 }  // namespace
 
+bool hold_lease(Connection& connection, const Lease& lease) {
+  return connection.exec("SELECT 1 FROM jobs WHERE " + std::string(kLeaseHeld) + " FOR SHARE",
+                         {lease.job_id, lease.worker, lease.attempt})
+             .rows() == 1;
+}
+
+LeaseLost::LeaseLost(const Lease& lease)
+    : std::runtime_error("job " + std::to_string(lease.job_id) + ": the lease of worker " + lease.worker + " (attempt " +
+                         std::to_string(lease.attempt) + ") is no longer held; nothing was written") {}
+
 std::string to_string(JobState state) { return std::string(kStateNames[static_cast<int>(state)]); }
 
 JobState parse_job_state(std::string_view text) {
@@ -37,20 +47,49 @@ JobQueue::JobQueue(ConnectionPool& pool, QueueOptions options) : pool_(pool), op
     throw std::invalid_argument("job queue: lease and poll interval must be positive");
 }
 
-std::int64_t JobQueue::enqueue(const NewJob& job) {
+namespace {
+
+nlohmann::json checked_parameters(const NewJob& job) {
   parse_configuration(job.configuration);  // throws std::invalid_argument naming it
   if (job.max_attempts < 1) throw std::invalid_argument("max_attempts must be at least 1");
   const nlohmann::json parameters = job.parameters.is_null() ? nlohmann::json::object() : job.parameters;
   if (!parameters.is_object()) throw std::invalid_argument("job parameters must be a JSON object");
-  auto connection = pool_.acquire();
+  return parameters;
+}
+
+std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohmann::json& parameters) {
   // NOTIFY is delivered at commit, so a woken worker always finds the job.
   return connection
-      ->exec(
+      .exec(
           "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts)"
           " VALUES ($1, $2, $3, $4) RETURNING id)"
           " SELECT id, pg_notify($5, id::text) FROM job",
           {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
       .int64(0, 0);
+}
+
+}  // namespace
+
+std::int64_t JobQueue::enqueue(const NewJob& job) {
+  const nlohmann::json parameters = checked_parameters(job);
+  auto connection = pool_.acquire();
+  return insert_job(*connection, job, parameters);
+}
+
+std::optional<std::int64_t> JobQueue::enqueue_within_limit(const NewJob& job, std::int64_t tenant_id, int max_active) {
+  const nlohmann::json parameters = checked_parameters(job);
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  connection->exec("SELECT 1 FROM tenants WHERE id = $1 FOR UPDATE", {tenant_id});
+  const std::int64_t active = connection
+                                  ->exec("SELECT count(*) FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+                                         " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
+                                         {tenant_id})
+                                  .int64(0, 0);
+  if (active >= max_active) return std::nullopt;
+  const std::int64_t id = insert_job(*connection, job, parameters);
+  transaction.commit();
+  return id;
 }
 
 std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
@@ -171,6 +210,12 @@ bool JobQueue::release(const Lease& lease) {
   // A clean stop is not the job's fault: the attempt it used is given back.
   return requeue_or_fail(*connection, kLeaseHeld, "released", "worker %s stopped with its server", "max_attempts + 1",
                          {lease.job_id, lease.worker, lease.attempt}) == 1;
+}
+
+bool JobQueue::requeue_after_outage(const Lease& lease) {
+  auto connection = pool_.acquire();
+  return requeue_or_fail(*connection, kLeaseHeld, "requeued", "worker %s lost the database while running it",
+                         "max_attempts", {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 
 bool JobQueue::record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message) {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +39,17 @@ struct Lease {
   std::int64_t job_id = 0;
   std::string worker;
   int attempt = 0;
+};
+
+// True when `lease` is still held, and then the job's row is locked (FOR SHARE) until the
+// caller's transaction ends: no reaper, cancel or final state can take the lease away before the
+// writes of that transaction commit. Call it inside a transaction.
+bool hold_lease(Connection& connection, const Lease& lease);
+
+// A write refused because the lease it was made under is no longer held.
+class LeaseLost : public std::runtime_error {
+ public:
+  explicit LeaseLost(const Lease& lease);
 };
 
 struct ClaimedJob {
@@ -93,6 +105,10 @@ class JobQueue {
 
   // Throws std::invalid_argument for an unknown configuration or max_attempts < 1.
   std::int64_t enqueue(const NewJob& job);
+  // The same, unless the tenant has `max_active` jobs queued or running already (nullopt then).
+  // Count and insert happen under a lock on the tenant's row, so that concurrent submits cannot
+  // all pass the count before any of them inserts.
+  std::optional<std::int64_t> enqueue_within_limit(const NewJob& job, std::int64_t tenant_id, int max_active);
 
   // The oldest queued job, now leased to `worker`; nullopt if none is queued.
   std::optional<ClaimedJob> claim(const std::string& worker);
@@ -116,6 +132,10 @@ class JobQueue {
   // run out: re-queued, and allowed one more attempt, since a clean stop is not the job's fault.
   // False when the lease was no longer this worker's.
   bool release(const Lease& lease);
+  // A worker that could not finish because the database stayed away longer than its retries
+  // gives the job back for another attempt. Unlike release() the attempt counts, so that a job
+  // cannot bounce forever; with none left it fails. False when the lease was no longer its.
+  bool requeue_after_outage(const Lease& lease);
 
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
   std::vector<JobEvent> events(std::int64_t job_id);

@@ -79,6 +79,7 @@ std::string polygon(const Footprint& footprint) {
 void ResultStore::save_submaps(std::int64_t job_id, const std::vector<Submap>& submaps) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   for (const Submap& submap : submaps) {
     auto [encoding, points] = encode_points(submap.points);
     std::optional<std::string> reference;
@@ -195,6 +196,7 @@ void ResultStore::save_constraints(std::int64_t job_id, const std::vector<Constr
   static const std::string insert = constraint_insert();
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   for (std::size_t i = 0; i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
     if ((c.type == ConstraintType::kOdometry) == c.path.has_value())
@@ -216,6 +218,7 @@ std::vector<Constraint> ResultStore::load_constraints(std::int64_t job_id) {
 void ResultStore::save_optimized_poses(std::int64_t job_id, const std::vector<Eigen::Isometry3d>& poses) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   for (std::size_t i = 0; i < poses.size(); ++i)
     connection->exec("INSERT INTO optimized_poses (job_id, submap, pose) VALUES ($1, $2, $3)",
                      {job_id, i, pose_array(poses[i])});
@@ -238,10 +241,13 @@ void ResultStore::put_tile(std::int64_t job_id, const TileKey& key, const Bytes&
     throw std::invalid_argument("tile format '" + key.format + "': geotiff, openvdb, png, cog or bag");
   if (key.level < 0) throw std::invalid_argument("tile level must be non-negative");
   auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   connection->exec(
       "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data) VALUES ($1, $2, $3, $4, $5, $6)"
       " ON CONFLICT (job_id, format, level, tile_col, tile_row) DO UPDATE SET data = EXCLUDED.data",
       {job_id, key.format, key.level, key.col, key.row, data});
+  transaction.commit();
 }
 
 std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) {
@@ -276,11 +282,14 @@ std::vector<TileKey> ResultStore::tiles(std::int64_t job_id) {
 
 void ResultStore::save_map_grid(std::int64_t job_id, const MapGrid& g) {
   auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   connection->exec(
       "INSERT INTO maps (job_id, epsg, resolution_m, min_easting, min_northing, max_easting, max_northing,"
       " tile_size_cells, levels) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
       {job_id, g.epsg, g.resolution_m, g.min_easting, g.min_northing, g.max_easting, g.max_northing, g.tile_size_cells,
        g.levels});
+  transaction.commit();
 }
 
 std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
@@ -296,8 +305,25 @@ std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
 
 void ResultStore::save_origin(std::int64_t job_id, const LocalOrigin& origin) {
   auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   connection->exec("UPDATE jobs SET origin_easting = $2, origin_northing = $3 WHERE id = $1",
                    {job_id, origin.easting, origin.northing});
+  transaction.commit();
+}
+
+ResultStore ResultStore::fenced(const Lease& lease) const {
+  ResultStore store(pool_);
+  store.fence_ = lease;
+  return store;
+}
+
+void ResultStore::check_fence(Connection& connection, std::int64_t job_id) const {
+  if (!fence_) return;
+  if (job_id != fence_->job_id)
+    throw std::invalid_argument("a store fenced by job " + std::to_string(fence_->job_id) + " cannot write job " +
+                                std::to_string(job_id));
+  if (!hold_lease(connection, *fence_)) throw LeaseLost(*fence_);
 }
 
 std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
@@ -311,6 +337,7 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
 void ResultStore::discard(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   // report_plots go with their report (ON DELETE CASCADE).
   for (const char* table : {"reports", "maps", "tiles", "optimized_poses", "constraints", "submaps"})
     connection->exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
@@ -322,6 +349,7 @@ void ResultStore::save_report(std::int64_t job_id, const Report& report) {
   if (!report.report.is_object()) throw std::invalid_argument("a report must be a JSON object");
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  check_fence(*connection, job_id);
   connection->exec("INSERT INTO reports (job_id, report) VALUES ($1, $2)", {job_id, report.report.dump()});
   for (const auto& [name, png] : report.plots)
     connection->exec("INSERT INTO report_plots (job_id, name, png) VALUES ($1, $2, $3)", {job_id, name, png});

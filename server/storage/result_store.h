@@ -13,6 +13,7 @@
 #include "core/pipeline/pipeline.h"
 #include "core/submaps/submap.h"
 #include "server/storage/database.h"
+#include "server/storage/job_queue.h"
 
 namespace bathyslam::storage {
 
@@ -48,6 +49,11 @@ class ResultStore {
  public:
   explicit ResultStore(ConnectionPool& pool) : pool_(pool) {}
 
+  // The same store for a worker holding `lease`: every write below (the lease's job only) commits
+  // only while the lease is held, else throws LeaseLost and writes nothing. A worker whose lease
+  // was reaped can thus neither add its results to those of the job's next attempt nor discard them.
+  ResultStore fenced(const Lease& lease) const;
+
   // Each save replaces nothing: it inserts in one transaction and fails (changing nothing) if
   // the job already has those rows.
   void save_submaps(std::int64_t job_id, const std::vector<Submap>& submaps);
@@ -82,7 +88,11 @@ class ResultStore {
   void discard(std::int64_t job_id);
 
  private:
+  // Inside a write's transaction: throws LeaseLost unless the fence's lease is held.
+  void check_fence(Connection& connection, std::int64_t job_id) const;
+
   ConnectionPool& pool_;
+  std::optional<Lease> fence_;
 };
 
 }  // namespace bathyslam::storage

@@ -138,6 +138,29 @@ bool SurveyStore::revoke_token(const std::string& token) {
              .affected() == 1;
 }
 
+bool SurveyStore::revoke_token(std::int64_t token_id) {
+  auto connection = pool_.acquire();
+  return connection->exec("UPDATE api_tokens SET revoked_at = now() WHERE id = $1 AND revoked_at IS NULL", {token_id})
+             .affected() == 1;
+}
+
+std::vector<TokenInfo> SurveyStore::list_tokens(const std::optional<std::string>& tenant) {
+  auto connection = pool_.acquire();
+  Result rows = connection->exec(
+      "SELECT t.id, n.name, t.description, extract(epoch FROM t.created_at)::float8,"
+      " extract(epoch FROM t.revoked_at)::float8 FROM api_tokens t JOIN tenants n ON n.id = t.tenant_id"
+      " WHERE $1::text IS NULL OR n.name = $1 ORDER BY t.id",
+      {tenant});
+  std::vector<TokenInfo> tokens;
+  for (int row = 0; row < rows.rows(); ++row) {
+    TokenInfo token{rows.int64(row, 0), std::string(rows.text(row, 1)), std::string(rows.text(row, 2)),
+                    rows.float8(row, 3), std::nullopt};
+    if (!rows.is_null(row, 4)) token.revoked_at = rows.float8(row, 4);
+    tokens.push_back(std::move(token));
+  }
+  return tokens;
+}
+
 std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::string& name,
                                         const std::vector<FileUpload>& files) {
   if (name.empty()) throw std::invalid_argument("a survey needs a name");
@@ -198,15 +221,44 @@ Bytes SurveyStore::read_file(std::int64_t survey_id, const std::string& name) {
   return content;
 }
 
-void SurveyStore::save_validation(std::int64_t survey_id, const Validation& validation) {
+namespace {
+
+void upsert_validation(Connection& connection, std::int64_t survey_id, const Validation& validation) {
   if (!validation.problems.is_array()) throw std::invalid_argument("validation problems must be a JSON array");
-  auto connection = pool_.acquire();
-  connection->exec(
+  connection.exec(
       "INSERT INTO survey_validations (survey_id, valid, problems, summary) VALUES ($1, $2, $3, $4)"
       " ON CONFLICT (survey_id) DO UPDATE SET valid = EXCLUDED.valid, problems = EXCLUDED.problems,"
       " summary = EXCLUDED.summary, validated_at = now()",
       {survey_id, validation.valid, validation.problems.dump(),
        validation.summary.is_null() ? Param(std::nullopt) : Param(validation.summary.dump())});
+}
+
+bool same_uploads(const std::vector<UploadState>& a, const std::vector<UploadState>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const UploadState& x, const UploadState& y) {
+    return x.name == y.name && x.size_bytes == y.size_bytes && x.committed_bytes == y.committed_bytes &&
+           x.complete == y.complete && x.sha256 == y.sha256;
+  });
+}
+
+}  // namespace
+
+void SurveyStore::save_validation(std::int64_t survey_id, const Validation& validation) {
+  auto connection = pool_.acquire();
+  upsert_validation(*connection, survey_id, validation);
+}
+
+bool SurveyStore::save_validation_if_unchanged(std::int64_t survey_id, const Validation& validation,
+                                               const std::vector<UploadState>& validated) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  connection->exec("SELECT 1 FROM surveys WHERE id = $1 FOR UPDATE", {survey_id});
+  Result rows = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 ORDER BY name", {survey_id});
+  std::vector<UploadState> now;
+  for (int row = 0; row < rows.rows(); ++row) now.push_back(upload_row(rows, row));
+  if (!same_uploads(now, validated)) return false;
+  upsert_validation(*connection, survey_id, validation);
+  transaction.commit();
+  return true;
 }
 
 std::optional<Validation> SurveyStore::validation(std::int64_t survey_id) {
@@ -329,6 +381,9 @@ UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string&
                       "data: a chunk holds at most " + std::to_string(chunk_bytes_) + " bytes, got " + std::to_string(data.size()));
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
+  // Waits for a finalize in progress (which locks the survey FOR UPDATE) and makes it wait for
+  // this chunk; the statement below then sees whether the survey became ready meanwhile.
+  connection->exec("SELECT 1 FROM surveys WHERE id = $1 FOR SHARE", {survey_id});
   const Result found = connection->exec(
       "SELECT f.id, f.size_bytes, f.committed_bytes, f.complete, f.sha256, f.chunk_count,"
       " coalesce(v.valid, false) AS finalized"

@@ -69,6 +69,15 @@ struct Validation {
   nlohmann::json summary;  // null when the bundle did not parse
 };
 
+// An issued token as an operator lists it: never the token itself, which only its holder has.
+struct TokenInfo {
+  std::int64_t id = 0;
+  std::string tenant;
+  std::string description;
+  double created_at = 0;  // seconds since the epoch
+  std::optional<double> revoked_at;
+};
+
 class SurveyStore {
  public:
   // Files are split into chunks of `chunk_bytes` (1 MiB by default: well under PostgreSQL's
@@ -81,6 +90,9 @@ class SurveyStore {
   std::string issue_token(std::int64_t tenant_id, const std::string& description);
   std::optional<std::int64_t> tenant_of_token(const std::string& token);  // nullopt: unknown or revoked
   bool revoke_token(const std::string& token);
+  bool revoke_token(std::int64_t token_id);  // by the id that list_tokens shows
+  // Every token, or a tenant's, oldest first.
+  std::vector<TokenInfo> list_tokens(const std::optional<std::string>& tenant = std::nullopt);
 
   // The survey and all its files in one transaction: a failure anywhere leaves nothing.
   // Throws std::invalid_argument for a bad name before touching the database.
@@ -112,6 +124,12 @@ class SurveyStore {
   Bytes read_file(std::int64_t survey_id, const std::string& name);
 
   void save_validation(std::int64_t survey_id, const Validation& validation);
+  // Saves `validation` only if the survey's uploads are still `validated` (what was read to make
+  // it), checked and saved under a lock on the survey that every upload step takes too: a file
+  // changed during validation cannot become part of a ready survey. False (nothing saved) if
+  // they changed.
+  bool save_validation_if_unchanged(std::int64_t survey_id, const Validation& validation,
+                                    const std::vector<UploadState>& validated);
   std::optional<Validation> validation(std::int64_t survey_id);
 
   // Removes the survey and everything under it (files, jobs, results). False if there was none.

@@ -140,5 +140,43 @@ TEST(Database, PoolLendsEachConnectionToOneBorrowerAtATime) {
   EXPECT_FALSE(c->exec("SELECT to_regclass('leaked') IS NOT NULL").boolean(0, 0));
 }
 
+TEST(Database, AStatementRunningPastTheTimeoutIsCancelled) {
+  testing::FreshDatabase db(false);
+  ConnectionPool pool(db.conninfo(), 1, {.statement_timeout = std::chrono::milliseconds(300)});
+  auto connection = pool.acquire();
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    connection->exec("SELECT pg_sleep(5)");
+    FAIL() << "a 5 s statement ran to its end";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "57014");  // query_canceled
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(2));
+  EXPECT_EQ(connection->exec("SELECT 1").int64(0, 0), 1);  // the connection is still good
+  // A connection string's own setting wins over the pool's default.
+  ConnectionPool own(db.conninfo() + " options='-c statement_timeout=0'", 1,
+                     {.statement_timeout = std::chrono::milliseconds(300)});
+  EXPECT_EQ(own.acquire()->exec("SHOW statement_timeout").text(0, 0), "0");
+}
+
+TEST(Database, AWaitForAPooledConnectionIsBounded) {
+  testing::FreshDatabase db(false);
+  ConnectionPool pool(db.conninfo(), 1, {.acquire_timeout = std::chrono::milliseconds(300)});
+  auto held = pool.acquire();
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    pool.acquire();
+    FAIL() << "a second connection out of a pool of one";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "53300");
+    EXPECT_TRUE(error.transient());
+  }
+  const auto waited = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(waited, std::chrono::milliseconds(300));
+  EXPECT_LT(waited, std::chrono::seconds(2));
+  { auto given_back = std::move(held); }
+  EXPECT_EQ(pool.acquire()->exec("SELECT 1").int64(0, 0), 1);
+}
+
 }  // namespace
 }  // namespace bathyslam::storage

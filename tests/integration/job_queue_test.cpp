@@ -1,5 +1,6 @@
 // The job queue under the conditions it exists for: racing workers, dead workers, idle workers.
 #include <algorithm>
+#include <atomic>
 #include <barrier>
 #include <chrono>
 #include <cstdio>
@@ -145,6 +146,64 @@ TEST(JobQueue, AJobGivenBackByAStoppingServerIsClaimedAtOnceAndKeepsItsAttempts)
   EXPECT_EQ(events[0].message, "worker stopping stopped with its server; re-queued");
   EXPECT_TRUE(queue.succeed(job->lease));
   EXPECT_EQ(queue.status(id).state, JobState::kSucceeded);
+}
+
+TEST(JobQueue, AJobGivenBackAfterAnOutageUsesItsAttemptAndFailsWhenNoneAreLeft) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 2);
+  JobQueue queue(pool, {.lease = 30s, .poll = 200ms});
+  const std::int64_t id = queue.enqueue({a_survey(pool), "gicp", {}, 2});
+  std::optional<ClaimedJob> first = queue.claim("first");
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(queue.requeue_after_outage(first->lease));
+  EXPECT_FALSE(queue.requeue_after_outage(first->lease));  // no longer its job
+  EXPECT_EQ(queue.status(id).state, JobState::kQueued);
+  std::optional<ClaimedJob> second = queue.claim("second");
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->lease.attempt, 2);
+  EXPECT_TRUE(queue.requeue_after_outage(second->lease));
+  const JobStatus status = queue.status(id);
+  EXPECT_EQ(status.state, JobState::kFailed);
+  ASSERT_TRUE(status.error);
+  EXPECT_EQ(*status.error, "worker second lost the database while running it on attempt 2 of 2; giving up");
+  std::vector<JobEvent> events = queue.events(id);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].stage, "requeued");
+  EXPECT_EQ(events[0].message, "worker first lost the database while running it; re-queued");
+}
+
+TEST(JobQueue, TheActiveJobLimitHoldsUnderConcurrentSubmits) {
+  testing::FreshDatabase db;
+  ConnectionPool setup(db.conninfo(), 1);
+  SurveyStore surveys(setup);
+  const std::int64_t tenant = surveys.create_tenant("acme");
+  const std::int64_t survey = surveys.create_survey(tenant, "lake", {});
+  constexpr int kSubmitters = 8, kLimit = 3;
+  std::atomic<int> accepted{0};
+  std::barrier start(kSubmitters);
+  std::vector<std::thread> submitters;
+  for (int i = 0; i < kSubmitters; ++i)
+    submitters.emplace_back([&] {
+      ConnectionPool pool(db.conninfo(), 1);  // a connection each, as concurrent requests have
+      JobQueue queue(pool);
+      start.arrive_and_wait();
+      if (queue.enqueue_within_limit({survey, "gicp"}, tenant, kLimit)) ++accepted;
+    });
+  for (std::thread& submitter : submitters) submitter.join();
+  EXPECT_EQ(accepted, kLimit);
+  JobQueue queue(setup);
+  EXPECT_EQ(queue.active_jobs(tenant), kLimit);
+  // Another tenant has a limit of its own.
+  const std::int64_t other = surveys.create_tenant("other");
+  EXPECT_TRUE(queue.enqueue_within_limit({surveys.create_survey(other, "lake", {}), "gicp"}, other, kLimit));
+}
+
+TEST(DatabaseError, ALostConnectionIsTransientAConstraintViolationIsNot) {
+  EXPECT_TRUE(DatabaseError("08006", "connection failure").transient());
+  EXPECT_TRUE(DatabaseError("57P01", "terminating connection due to administrator command").transient());
+  EXPECT_TRUE(DatabaseError("40001", "could not serialize access").transient());
+  EXPECT_FALSE(DatabaseError("23505", "duplicate key").transient());
+  EXPECT_FALSE(DatabaseError("22P02", "invalid input syntax").transient());
 }
 
 TEST(JobQueue, HeartbeatsKeepALeaseAlivePastItsFirstExpiry) {

@@ -217,6 +217,40 @@ TEST(ResultStore, AnAttemptStoppedWhileStoringLeavesNothingTheNextOneCollidesWit
   EXPECT_TRUE(f.results.load_report(other));
 }
 
+// A worker whose lease was reaped while it stored must neither add to nor discard the results
+// of the attempt that took the job over.
+TEST(ResultStore, AWorkerThatLostItsLeaseWritesNothing) {
+  JobFixture f;
+  f.pool.acquire()->exec("UPDATE jobs SET max_attempts = 2");
+  std::optional<ClaimedJob> first = f.jobs.claim("first");
+  ASSERT_TRUE(first);
+  ResultStore late = f.results.fenced(first->lease);
+  late.save_submaps(f.job, {a_submap(0, true), a_submap(1, true)});  // while it holds the lease
+  f.pool.acquire()->exec("UPDATE jobs SET lease_expires_at = now() - interval '1 s' WHERE id = $1", {f.job});
+  ASSERT_EQ(f.jobs.reap(), 1);
+  std::optional<ClaimedJob> second = f.jobs.claim("second");
+  ASSERT_TRUE(second);
+  ResultStore current = f.results.fenced(second->lease);
+  current.discard(f.job);
+  current.save_submaps(f.job, {a_submap(0, false), a_submap(1, false), a_submap(2, false)});
+  current.save_report(f.job, {{{"attempt", 2}}, {}});
+
+  EXPECT_THROW(late.discard(f.job), LeaseLost);
+  EXPECT_THROW(late.save_origin(f.job, {1, 2}), LeaseLost);
+  EXPECT_THROW(late.save_optimized_poses(f.job, {a_pose(0, 0, 0, 0)}), LeaseLost);
+  EXPECT_THROW(late.put_tile(f.job, {"png", 0, 0, 0}, {1}), LeaseLost);
+  EXPECT_THROW(late.save_map_grid(f.job, {32651, 0.5, 0, 0, 1, 1, 512, 1}), LeaseLost);
+  EXPECT_THROW(late.save_report(f.job, {{{"attempt", 1}}, {}}), LeaseLost);
+  EXPECT_EQ(f.results.load_submaps(f.job).size(), 3u);
+  EXPECT_EQ(f.results.load_report(f.job)->report, (nlohmann::json{{"attempt", 2}}));
+  EXPECT_TRUE(f.results.tiles(f.job).empty());
+  EXPECT_EQ(f.results.origin(f.job), std::nullopt);
+  EXPECT_THROW(current.save_optimized_poses(f.job + 1, {}), std::invalid_argument);  // its own job only
+  // Once the job has ended, no lease is held at all.
+  ASSERT_TRUE(f.jobs.succeed(second->lease));
+  EXPECT_THROW(current.put_tile(f.job, {"png", 0, 0, 0}, {1}), LeaseLost);
+}
+
 TEST(ResultStore, DeletingASurveyRemovesEverythingUnderIt) {
   JobFixture f;
   // A second survey of another tenant, with the same kinds of rows, must survive.

@@ -106,4 +106,17 @@ token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)
 [ "$(BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs | wc -l)" = 1 ] || fail "another tenant sees jobs"
 if BATHYSLAM_TOKEN=bst_wrong "$BATHYSLAM" jobs 2> "$work/auth.err"; then fail "a wrong token was accepted"; fi
 grep -q "UNAUTHENTICATED" "$work/auth.err" || fail "$(cat "$work/auth.err")"
+
+# An operator lists tokens (never the secret) and revokes one by its id: refused from then on.
+ci=$("$BATHYSLAM_SERVER_BIN" token create --db "$url" --tenant other --description "ci runner")
+BATHYSLAM_TOKEN=$ci "$BATHYSLAM" jobs > /dev/null || fail "a new token was refused"
+"$BATHYSLAM_SERVER_BIN" token list --db "$url" --tenant other > "$work/tokens" || fail "token list"
+grep -q "$ci\|$token" "$work/tokens" && fail "token list shows a secret: $(cat "$work/tokens")"
+id=$(awk '/ci runner$/ {print $1}' "$work/tokens")
+[ -n "$id" ] && [ "$(grep -c ' other ' "$work/tokens")" = 2 ] || fail "$(cat "$work/tokens")"
+"$BATHYSLAM_SERVER_BIN" token revoke --db "$url" --id "$id" > /dev/null || fail "token revoke"
+if BATHYSLAM_TOKEN=$ci "$BATHYSLAM" jobs 2> "$work/revoked.err"; then fail "a revoked token was accepted"; fi
+grep -q "UNAUTHENTICATED" "$work/revoked.err" || fail "$(cat "$work/revoked.err")"
+BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs > /dev/null || fail "revoking one token revoked another"
+if "$BATHYSLAM_SERVER_BIN" token revoke --db "$url" --id "$id" 2> /dev/null; then fail "revoked twice"; fi
 echo "service cli: ok"

@@ -98,6 +98,19 @@ TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
   EXPECT_FALSE(store.revoke_token(token));
   EXPECT_EQ(store.tenant_of_token(token), std::nullopt);
   EXPECT_EQ(store.tenant_of_token(second), other);
+
+  // Listed without the secrets; revoked by the id the list shows.
+  std::vector<TokenInfo> listed = store.list_tokens();
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(listed[0].tenant, "acme");
+  EXPECT_EQ(listed[0].description, "ci");
+  EXPECT_TRUE(listed[0].revoked_at);
+  EXPECT_FALSE(listed[1].revoked_at);
+  EXPECT_EQ(store.list_tokens("other").size(), 1u);
+  EXPECT_TRUE(store.list_tokens("nobody").empty());
+  EXPECT_TRUE(store.revoke_token(listed[1].id));
+  EXPECT_FALSE(store.revoke_token(listed[1].id));
+  EXPECT_EQ(store.tenant_of_token(second), std::nullopt);
 }
 
 TEST(SurveyStore, TheLatestValidationIsKept) {
@@ -119,6 +132,27 @@ TEST(SurveyStore, TheLatestValidationIsKept) {
   EXPECT_TRUE(second->valid);
   EXPECT_EQ(second->summary["pings"], 1200);
   EXPECT_THROW(store.save_validation(survey, {true, nlohmann::json::object(), nullptr}), std::invalid_argument);
+}
+
+// FinalizeSurvey reads the files, validates them, then saves: an upload landing in between must
+// not make a survey ready with content that was never validated.
+TEST(SurveyStore, AValidationOfFilesThatChangedMeanwhileIsNotSaved) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "lake", "", nlohmann::json::object(), nlohmann::json::object());
+  const Bytes nav = bytes_of("time,easting\n1,2\n");
+  store.begin_upload(survey, "nav.csv", static_cast<std::int64_t>(nav.size()), sha256(nav));
+  store.append_chunk(survey, "nav.csv", 0, Bytes(nav.begin(), nav.begin() + 4));
+  const std::vector<UploadState> read = store.uploads(survey);  // what the validation saw
+  store.append_chunk(survey, "nav.csv", 4, Bytes(nav.begin() + 4, nav.end()));  // the upload goes on
+  const Validation ready{true, nlohmann::json::array(), {{"pings", 1}}};
+  EXPECT_FALSE(store.save_validation_if_unchanged(survey, ready, read));
+  EXPECT_EQ(store.validation(survey), std::nullopt);
+  EXPECT_TRUE(store.save_validation_if_unchanged(survey, ready, store.uploads(survey)));
+  EXPECT_TRUE(store.validation(survey)->valid);
+  // Ready now: its files are fixed.
+  EXPECT_THROW(store.begin_upload(survey, "pings.csv", 1, sha256(bytes_of("x"))), UploadError);
 }
 
 }  // namespace

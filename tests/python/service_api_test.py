@@ -45,20 +45,24 @@ class Server:
     """bathyslam-server on a database of its own, on a free port."""
     count = 0
 
-    def __init__(self, cluster=None):
+    def __init__(self, cluster=None, args=(), db=None):
+        """`args`: more server options; `db`: another Server's database, shared (not dropped here)."""
         pg_sh, cluster = ENV["PG_SH"], cluster or ENV["BATHYSLAM_TEST_PG"]
         Server.count += 1
-        self.db = f"service_api_{os.getpid()}_{Server.count}"
+        self.db = db or f"service_api_{os.getpid()}_{Server.count}"
+        self.args, self.owns_db = list(args), db is None
         self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
         self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
-        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
-        self.log = open(os.path.join(STUBS, f"{self.db}.log"), "w+")
+        if self.owns_db:
+            psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
+        self.log = open(os.path.join(STUBS, f"{self.db}_{Server.count}.log"), "w+")
         self.start()
 
     def start(self):
         """A server process on this database (again, after halt())."""
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
-                                         "--workers", "1", "--dev-tenant", "python"], stdout=subprocess.PIPE, stderr=self.log, text=True)
+                                         "--workers", "1", "--dev-tenant", "python", *self.args], stdout=subprocess.PIPE,
+                                        stderr=self.log, text=True)
         line = self.process.stdout.readline()
         match = re.search(r"listening on (\S+)", line)
         if not match:
@@ -83,9 +87,11 @@ class Server:
         self.process.stdout.close()
 
     def stop(self):
-        self.halt()
+        if self.process.poll() is None:
+            self.halt()
         self.log.close()
-        psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
+        if self.owns_db:
+            psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE);')
 
 
 def upload_requests(survey_id, name, data, start=0, sha=None, cut_after=None):
@@ -393,8 +399,8 @@ class ServerStopTest(unittest.TestCase):
         self.assertEqual(self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
 
 
-class DatabaseOutageTest(unittest.TestCase):
-    """Health follows the database: a cluster of this test's own is stopped and started again."""
+class OwnCluster(unittest.TestCase):
+    """A test with a PostgreSQL cluster of its own, which it may stop, and a server on it."""
 
     def setUp(self):
         parent = tempfile.mkdtemp(prefix="bathyslam-outage-")
@@ -406,15 +412,21 @@ class DatabaseOutageTest(unittest.TestCase):
 
     def tearDown(self):
         subprocess.run(["bash", ENV["PG_SH"], "start", self.cluster], check=True, capture_output=True)
-        self.server.stop()
+        if self.server.process.poll() is None:
+            self.server.stop()
 
     def wait_for(self, status, seconds=15):
+        """The health status once it is `status`, or whatever it is after `seconds`."""
         deadline = time.monotonic() + seconds
         while True:
             reply = self.server.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
             if reply.status == status or time.monotonic() > deadline:
                 return reply.status
             time.sleep(0.2)
+
+
+class DatabaseOutageTest(OwnCluster):
+    """Health follows the database: a cluster of this test's own is stopped and started again."""
 
     def test_health_is_not_serving_while_the_database_is_down(self):
         serving, not_serving = health_pb2.HealthCheckResponse.SERVING, health_pb2.HealthCheckResponse.NOT_SERVING

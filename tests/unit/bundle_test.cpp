@@ -149,6 +149,37 @@ TEST_F(BundleTest, MissingNameAndBrokenJson) {
   EXPECT_THAT(expect_rejected(), HasSubstr("survey.json:3: not valid JSON"));
 }
 
+// Nesting is what crashes a JSON consumer (copies and dumps recurse per level), not the parse:
+// the reader refuses it before any copy is made.
+TEST_F(BundleTest, SurveyJsonNestedTooDeepOrTooLargeIsRefused) {
+  const std::string deep(100000, '[');
+  write_lines(kSurveyJsonFile, {R"({"name": "x", "crs": "EPSG:32651", "sonar": {"a": )" + deep + std::string(100000, ']') + "}}"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: nested deeper than 64 levels"));
+  write_lines(kSurveyJsonFile, {R"({"name": "x", "crs": "EPSG:32651", "sonar": {"a": ")" + std::string(2 << 20, 'x') + "\"}}"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: larger than 1048576 bytes"));
+  // 63 levels inside the document's own object are fine.
+  write_lines(kSurveyJsonFile, {R"({"name": "x", "crs": "EPSG:32651", "sonar": {"a": )" + std::string(62, '[') +
+                                std::string(62, ']') + "}}"});
+  EXPECT_TRUE(read_bundle(dir_).survey);
+}
+
+TEST(BoundedJson, LimitsAreExactAndSyntaxErrorsStayParseErrors) {
+  const JsonLimits limits{.max_bytes = 100, .max_depth = 3};
+  EXPECT_EQ(parse_bounded_json("[[[1]]]", limits), nlohmann::json::parse("[[[1]]]"));
+  EXPECT_THROW(parse_bounded_json("[[[[1]]]]", limits), JsonLimitError);
+  EXPECT_THROW(parse_bounded_json(R"({"a": {"b": {"c": {}}}})", limits), JsonLimitError);
+  EXPECT_THROW(parse_bounded_json(std::string(101, ' ') + "1", limits), JsonLimitError);
+  EXPECT_THROW(parse_bounded_json("[1,", limits), nlohmann::json::parse_error);
+}
+
+TEST_F(BundleTest, ALineTooLongIsNamedAndEndsTheFile) {
+  replace_line(kNavFile, 3, std::string(100000, '1'));
+  replace_line(kPingsFile, 1, std::string(100000, 't'));
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("nav.csv:3: line longer than 65536 bytes; the rest of the file was not read"));
+  EXPECT_THAT(problems, HasSubstr("pings.csv:1: line longer than 65536 bytes"));
+}
+
 TEST_F(BundleTest, NavHeaderMustBeExact) {
   replace_line(kNavFile, 1, "time,easting,northing,depth,roll,pitch,yaw");
   EXPECT_THAT(expect_rejected(),

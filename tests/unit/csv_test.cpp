@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <string>
 
@@ -32,6 +33,42 @@ TEST(LineReader, CountsLines) {
   std::string_view line;
   while (reader.next(line)) {}
   EXPECT_EQ(reader.line_number(), 3u);
+}
+
+TEST(LineReader, ALineOverTheLimitIsRefusedWithItsNumber) {
+  const std::string text = "a\n" + std::string(LineReader::kMaxLineBytes, 'x') + "\n" +
+                           std::string(LineReader::kMaxLineBytes + 1, 'y') + "\nz\n";
+  for (std::size_t block : {std::size_t{7}, std::size_t{4} << 20}) {
+    MemorySource source(text);
+    LineReader reader(source, block);
+    std::string_view line;
+    ASSERT_TRUE(reader.next(line));
+    ASSERT_TRUE(reader.next(line));  // exactly the limit is fine
+    EXPECT_EQ(line.size(), LineReader::kMaxLineBytes);
+    try {
+      reader.next(line);
+      FAIL() << "a line over the limit was returned (block " << block << ")";
+    } catch (const LineTooLong& error) {
+      EXPECT_EQ(error.line(), 3u);
+    }
+  }
+}
+
+// A source of endless bytes without a newline: the reader gives up after the limit instead of
+// growing its buffer until memory runs out.
+TEST(LineReader, AnEndlessLineIsRefusedWithoutReadingItAll) {
+  struct Endless : ByteSource {
+    std::size_t given = 0;
+    std::size_t read(char* buffer, std::size_t size) override {
+      std::fill(buffer, buffer + size, 'x');
+      given += size;
+      return size;
+    }
+  } source;
+  LineReader reader(source, 4096);
+  std::string_view line;
+  EXPECT_THROW(reader.next(line), LineTooLong);
+  EXPECT_LT(source.given, 4 * LineReader::kMaxLineBytes);
 }
 
 TEST(SplitFields, CountsFieldsBeyondCapacity) {

@@ -1,0 +1,21 @@
+#include "core/io/bounded_json.h"
+
+#include <string>
+
+namespace bathyslam {
+
+nlohmann::json parse_bounded_json(std::string_view text, const JsonLimits& limits) {
+  if (text.size() > limits.max_bytes)
+    throw JsonLimitError("larger than " + std::to_string(limits.max_bytes) + " bytes");
+  // `depth` counts the containers around a value; throwing ends the parse before it goes deeper.
+  auto guard = [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
+    const bool opens = event == nlohmann::json::parse_event_t::object_start ||
+                       event == nlohmann::json::parse_event_t::array_start;
+    if (opens && depth >= limits.max_depth)
+      throw JsonLimitError("nested deeper than " + std::to_string(limits.max_depth) + " levels");
+    return true;
+  };
+  return nlohmann::json::parse(text, guard);
+}
+
+}  // namespace bathyslam

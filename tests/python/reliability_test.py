@@ -1,0 +1,223 @@
+#!/usr/bin/env python3
+"""The server under a database outage and hostile input: it must stay up, say what is wrong,
+and finish the work it took. The same environment as service_api_test.py (set by ctest), whose
+Server and helpers this reuses: a real bathyslam-server on a real PostgreSQL."""
+import hashlib
+import subprocess
+import time
+import unittest
+
+import grpc
+
+from service_api_test import (ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, psql, read, ready_survey,
+                              survey_pb2, upload_requests)
+
+SERVING = health_pb2.HealthCheckResponse.SERVING
+NOT_SERVING = health_pb2.HealthCheckResponse.NOT_SERVING
+
+
+def pg(command, cluster):
+    subprocess.run(["bash", ENV["PG_SH"], command, cluster], check=True, capture_output=True)
+
+
+def poses(server, job_id):
+    """A job's optimized poses, as exact numbers."""
+    trajectory = server.maps.GetTrajectory(map_pb2.GetTrajectoryRequest(job_id=job_id), timeout=30)
+    return [(p.submap, str(p.optimized).replace("\n", " ")) for p in trajectory.poses]
+
+
+def final_state(server, job_id, seconds=300):
+    """The job's state once it has ended, riding out UNAVAILABLE answers while the database is away."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            job = server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job_id), timeout=30)
+            if job.state not in (job_pb2.QUEUED, job_pb2.RUNNING):
+                return job
+        except grpc.RpcError as error:
+            if error.code() != grpc.StatusCode.UNAVAILABLE:
+                raise
+        time.sleep(0.5)
+    raise AssertionError(f"job {job_id} did not end within {seconds} s")
+
+
+class OutageTest(OwnCluster):
+    def assert_alive(self):
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+
+    def outage(self, seconds):
+        """The cluster stopped for `seconds`: health follows it, the server stays up."""
+        stopped = time.monotonic()
+        pg("stop", self.cluster)
+        self.assertEqual(self.wait_for(NOT_SERVING), NOT_SERVING, self.server.server_log())
+        while time.monotonic() - stopped < seconds:
+            self.assert_alive()
+            time.sleep(0.5)
+        pg("start", self.cluster)
+        self.assertEqual(self.wait_for(SERVING), SERVING, self.server.server_log())
+        self.assert_alive()
+
+
+class JobThroughOutageTest(OutageTest):
+    def test_a_job_survives_the_database_stopping_mid_job(self):
+        survey_id = ready_survey(self.server.surveys, "outage")
+        job = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        for event in self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
+            self.assertNotIn(event.state, (job_pb2.SUCCEEDED, job_pb2.FAILED), "the job ended before the outage")
+            if event.stage == "register":
+                break
+        self.outage(15)  # while it registers: heartbeats, state polls and progress events fail
+        while (now := self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30)).stage not in ("map", "store"):
+            self.assertEqual(now.state, job_pb2.RUNNING, now.error + self.server.server_log())
+            time.sleep(0.1)
+        self.outage(8)  # while it fuses the map and stores its results
+
+        disturbed = final_state(self.server, job.id)
+        log = self.server.server_log()
+        self.assertEqual(disturbed.state, job_pb2.SUCCEEDED, disturbed.error + log)
+        # The outages cost retries, not the attempt.
+        self.assertEqual(disturbed.attempts, 1, log)
+        self.assertIn("storing results: succeeded after", log)
+        self.assert_alive()
+        # The same job undisturbed: the outage changed nothing in what the job computed.
+        again = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        self.assertEqual(final_state(self.server, again.id).state, job_pb2.SUCCEEDED, self.server.server_log())
+        self.assertEqual(poses(self.server, job.id), poses(self.server, again.id))
+        self.assertGreater(len(poses(self.server, job.id)), 5)
+        print(f"\njob through two outages: {disturbed.finished_at - disturbed.started_at:.1f} s", flush=True)
+
+
+class KilledServerTest(unittest.TestCase):
+    """Two servers on one database; the one running a job is killed outright (SIGKILL: no
+    give-back). The other reaps the job once its lease expires and finishes it with the poses of
+    an undisturbed run. A 5 s lease keeps the test short."""
+
+    def setUp(self):
+        self.first = Server(args=["--lease-seconds", "5"])
+        self.addCleanup(self.first.stop)
+
+    def test_the_other_server_finishes_the_job_of_a_killed_one(self):
+        survey_id = ready_survey(self.first.surveys, "killed")
+        job = self.first.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        for event in self.first.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120):
+            if event.stage == "register":
+                break
+        # The second server starts once the first holds the job, so that it is the first's to lose.
+        second = Server(args=["--lease-seconds", "5"], db=self.first.db)
+        self.addCleanup(second.stop)
+        self.first.channel.close()
+        self.first.process.kill()
+        self.first.process.wait(timeout=30)
+        self.first.process.stdout.close()
+        killed = time.monotonic()
+        ended = final_state(second, job.id)
+        log = second.server_log()
+        self.assertEqual(ended.state, job_pb2.SUCCEEDED, ended.error + log)
+        self.assertEqual(ended.attempts, 2, log)
+        self.assertIn(f"job {job.id}: claimed by", log)
+        print(f"\nkilled server's job finished by the other {time.monotonic() - killed:.1f} s after the kill", flush=True)
+        again = second.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
+        self.assertEqual(final_state(second, again.id).state, job_pb2.SUCCEEDED, second.server_log())
+        self.assertEqual(poses(second, job.id), poses(second, again.id))
+
+
+class HostileInputTest(unittest.TestCase):
+    """Requests and files built to crash or exhaust the server (JSON nested 100 000 deep, about
+    200 KB, under the message limit; chunks and sizes out of bounds; a survey spanning 500 km)
+    are refused with the field named, and the server stays up and its database unchanged."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.server = Server()
+        cls.surveys = cls.server.surveys
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+
+    def refused(self, call, request):
+        with self.assertRaises(grpc.RpcError) as raised:
+            call(request, timeout=60)
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
+        return raised.exception.details()
+
+    def fingerprint(self):
+        """Row counts and a checksum of the tables an upload or a survey touches."""
+        return psql(self.server.url, "SELECT (SELECT count(*) FROM surveys), (SELECT count(*) FROM survey_files),"
+                                     " (SELECT coalesce(sum(committed_bytes), 0) FROM survey_files),"
+                                     " (SELECT count(*) FROM survey_file_chunks),"
+                                     " (SELECT md5(coalesce(string_agg(md5(data), '' ORDER BY file_id, seq), ''))"
+                                     "  FROM survey_file_chunks), (SELECT count(*) FROM survey_validations WHERE valid)")
+
+    def test_upload_streams_out_of_bounds(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="bounds"), timeout=30).id
+        nav = read("nav.csv")
+        sha = hashlib.sha256(nav).digest()
+
+        def stream(name="nav.csv", size=len(nav), offset=0, data=b"", **extra):
+            yield survey_pb2.UploadFileRequest(survey_id=survey_id, file_name=name, size_bytes=size, sha256=sha,
+                                               offset=offset, data=data, **extra)
+
+        cases = [
+            (stream(size=-1), grpc.StatusCode.INVALID_ARGUMENT, "size_bytes: must not be negative"),
+            (stream(size=9 << 30), grpc.StatusCode.RESOURCE_EXHAUSTED, "size_bytes: 9663676416 is over this server's limit"),
+            (stream(offset=-5, data=b"x"), grpc.StatusCode.INVALID_ARGUMENT, "offset: must not be negative"),
+            (stream(data=b"x" * ((1 << 20) + 1)), grpc.StatusCode.INVALID_ARGUMENT, "data: a chunk holds at most 1 MiB"),
+            (stream(size=10, data=b"x" * 20), grpc.StatusCode.INVALID_ARGUMENT,
+             "data: 'nav.csv' was declared 10 bytes; this chunk would end at 20"),
+            (stream(name="extra.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: 'extra.csv' is not a bundle file"),
+            (stream(name="../nav.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: '../nav.csv' is not a bundle file"),
+        ]
+        before = self.fingerprint()
+        for requests, code, message in cases:
+            with self.assertRaises(grpc.RpcError) as raised:
+                self.surveys.UploadFile(requests, timeout=60)
+            self.assertEqual((raised.exception.code(), raised.exception.details()[:len(message)]), (code, message))
+            self.assertEqual(self.fingerprint(), before, message)
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+
+    def test_a_survey_spanning_500_km_is_refused_before_any_map(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="stray fix"), timeout=30).id
+        files = {"survey.json": b'{"name": "stray fix", "crs": "EPSG:32651"}',
+                 "nav.csv": b"time,easting,northing,depth,roll,pitch,heading\n"
+                            b"1720000000,452000,4630000,1,0,0,90\n1720000010,952000,5130000,1,0,0,90\n",
+                 "pings.csv": b"time,beam,along,across,down\n1720000001,0,0,5,10\n"}
+        for name, data in files.items():
+            self.surveys.UploadFile(upload_requests(survey_id, name, data), timeout=60)
+        details = self.refused(self.surveys.FinalizeSurvey, survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("nav.csv: easting, northing: the survey covers 500010 m × 500010 m: a map of 1000042000441 cells"
+                      " at 0.5 m, over the limit of 100000000", details)
+        survey = self.surveys.GetSurvey(survey_pb2.GetSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(survey.state, survey_pb2.Survey.UPLOADING)
+
+    def test_deeply_nested_sonar_and_vehicle_json(self):
+        deep = '{"a": ' + "[" * 100000 + "]" * 100000 + "}"
+        for field in ("sonar_json", "vehicle_json"):
+            details = self.refused(self.surveys.CreateSurvey,
+                                   survey_pb2.CreateSurveyRequest(name="deep " + field, **{field: deep}))
+            self.assertEqual(details, field + ": nested deeper than 64 levels")
+        huge = '{"a": "' + "x" * (1536 << 10) + '"}'
+        self.assertEqual(self.refused(self.surveys.CreateSurvey, survey_pb2.CreateSurveyRequest(name="huge", sonar_json=huge)),
+                         "sonar_json: larger than 1048576 bytes")
+        listed = self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(), timeout=30)
+        self.assertEqual([s.name for s in listed.surveys if s.name.startswith(("deep", "huge"))], [])
+
+    def test_deeply_nested_survey_json_in_an_upload(self):
+        survey_id = self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="deep bundle"), timeout=30).id
+        deep = ('{"name": "deep", "crs": "EPSG:32651", "sonar": {"a": ' + "[" * 100000 + "]" * 100000 + "}}").encode()
+        self.assertTrue(self.surveys.UploadFile(upload_requests(survey_id, "survey.json", deep), timeout=60).complete)
+        for name in ("nav.csv", "pings.csv"):
+            self.surveys.UploadFile(upload_requests(survey_id, name, read(name)), timeout=120)
+        details = self.refused(self.surveys.FinalizeSurvey, survey_pb2.FinalizeSurveyRequest(survey_id=survey_id))
+        self.assertIn("survey.json: nested deeper than 64 levels", details)
+        survey = self.surveys.GetSurvey(survey_pb2.GetSurveyRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(survey.state, survey_pb2.Survey.UPLOADING)
+        # A survey.json over its limit is refused when declared, before a byte is stored.
+        big = b'{"name": "big", "crs": "EPSG:32651", "sonar": {"a": "' + b"x" * (2 << 20) + b'"}}'
+        details = self.refused(self.surveys.UploadFile, upload_requests(survey_id, "survey.json", big))
+        self.assertEqual(details, f"size_bytes: survey.json is at most 1048576 bytes, not {len(big)}")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
