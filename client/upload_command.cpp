@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -33,6 +34,7 @@ struct UploadOptions {
   std::string reference_nav;        // GSF: uploaded as reference_nav.csv
   std::string name;
   std::int64_t stop_after_bytes = 0;  // > 0: stop there, as a cut connection would (to test resuming)
+  double retry_seconds = 300;         // how long UNAVAILABLE answers are waited out
 };
 
 // One file to upload: the name the server stores it under, its size and its bytes from an offset.
@@ -199,6 +201,25 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
   return true;
 }
 
+// A database or server restart costs a pause, not the upload: a call answered UNAVAILABLE is
+// made again after a growing pause, for up to --retry-seconds; an upload then resumes from what
+// the server has committed (upload_file asks first).
+template <typename Step>
+auto retrying(const UploadOptions& o, Step&& step) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.retry_seconds);
+  for (double pause = 1;; pause = std::min(2 * pause, 15.0)) {
+    try {
+      return step();
+    } catch (const CallFailed& failed) {
+      if (failed.code() != grpc::StatusCode::UNAVAILABLE ||
+          std::chrono::steady_clock::now() + std::chrono::duration<double>(pause) > give_up)
+        throw;
+      std::fprintf(stderr, "\n  %s; trying again in %.0f s\n", failed.what(), pause);
+      std::this_thread::sleep_for(std::chrono::duration<double>(pause));
+    }
+  }
+}
+
 void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
@@ -209,16 +230,17 @@ void run_upload(const UploadOptions& o) {
   Declaration declared;
   const std::vector<LocalFile> files = gsf ? gsf_files(o, declared) : bundle_files(o, declared);
   bool ready = false;
-  const std::int64_t id = find_or_create_survey(*surveys, o, declared, ready);
+  const std::int64_t id = retrying(o, [&] { return find_or_create_survey(*surveys, o, declared, ready); });
   if (!ready) {
     std::int64_t budget = o.stop_after_bytes;
     for (const LocalFile& file : files) {
-      if (!upload_file(*surveys, o, id, file, budget)) throw std::runtime_error("upload interrupted (--stop-after-bytes)");
+      if (!retrying(o, [&] { return upload_file(*surveys, o, id, file, budget); }))
+        throw std::runtime_error("upload interrupted (--stop-after-bytes)");
     }
     v1::FinalizeSurveyRequest finalize;
     finalize.set_survey_id(id);
     v1::Survey survey;
-    check("FinalizeSurvey", surveys->FinalizeSurvey(o.remote.context(600).get(), finalize, &survey));
+    retrying(o, [&] { check("FinalizeSurvey", surveys->FinalizeSurvey(o.remote.context(600).get(), finalize, &survey)); });
   }
   std::printf("survey %lld ready\n", static_cast<long long>(id));
 }
@@ -236,6 +258,9 @@ void add_upload_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--name", o->name, "survey name (default: survey.json's name, or the first GSF file's)");
   cmd->add_option("--stop-after-bytes", o->stop_after_bytes, "stop after sending this many bytes, as a cut connection would");
+  cmd->add_option("--retry-seconds", o->retry_seconds, "wait out an unavailable server or database this long, then resume")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
   add_remote_options(cmd, o->remote);
   cmd->callback([o] { run_upload(*o); });
 }

@@ -9,7 +9,7 @@ import unittest
 
 import grpc
 
-from service_api_test import (ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, psql, read, ready_survey,
+from service_api_test import (BUNDLE, ENV, OwnCluster, Server, health_pb2, job_pb2, map_pb2, psql, read, ready_survey,
                               survey_pb2, upload_requests)
 
 SERVING = health_pb2.HealthCheckResponse.SERVING
@@ -85,6 +85,31 @@ class JobThroughOutageTest(OutageTest):
         self.assertEqual(poses(self.server, job.id), poses(self.server, again.id))
         self.assertGreater(len(poses(self.server, job.id)), 5)
         print(f"\njob through two outages: {disturbed.finished_at - disturbed.started_at:.1f} s", flush=True)
+
+
+class UploadThroughRestartTest(OutageTest):
+    def test_an_upload_survives_the_database_restarting_in_the_middle(self):
+        """`bathyslam upload` waits out the restart and resumes where the server's committed
+        bytes end; the stored file hashes to the local one (the server checks the declared
+        SHA-256 once the last byte is in, and the test compares it with the file's)."""
+        cli = subprocess.Popen([ENV["BATHYSLAM"], "upload", BUNDLE, "--name", "restarted", "--server", self.server.address],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: cli.poll() is None and cli.kill())
+        committed = "SELECT coalesce(max(committed_bytes), 0) FROM survey_files WHERE name = 'pings.csv'"
+        deadline = time.monotonic() + 120
+        while int(psql(self.server.url, committed) or 0) < 8 << 20:
+            self.assertIsNone(cli.poll(), "the upload ended before the restart")
+            self.assertLess(time.monotonic(), deadline, "pings.csv never started")
+            time.sleep(0.05)
+        self.outage(3)
+        out, err = cli.communicate(timeout=300)
+        self.assertEqual(cli.returncode, 0, err + self.server.server_log())
+        self.assertRegex(out, r"survey \d+ ready")
+        self.assertIn("trying again", err)
+        self.assertIn("resuming pings.csv", err)
+        stored = psql(self.server.url, "SELECT encode(sha256, 'hex'), committed_bytes, complete FROM survey_files"
+                                       " WHERE name = 'pings.csv'")
+        self.assertEqual(stored, f"{hashlib.sha256(read('pings.csv')).hexdigest()}|{len(read('pings.csv'))}|t")
 
 
 class KilledServerTest(unittest.TestCase):

@@ -67,7 +67,8 @@ class Server:
         match = re.search(r"listening on (\S+)", line)
         if not match:
             raise RuntimeError("server did not start: " + line + self.server_log())
-        self.channel = grpc.insecure_channel(match.group(1), options=[("grpc.max_receive_message_length", 64 << 20)])
+        self.address = match.group(1)
+        self.channel = grpc.insecure_channel(self.address, options=[("grpc.max_receive_message_length", 64 << 20)])
         # Stubs on this process's channel: a restart gives new ones.
         self.surveys = survey_pb2_grpc.SurveyServiceStub(self.channel)
         self.jobs = job_pb2_grpc.JobServiceStub(self.channel)
