@@ -59,6 +59,7 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
 struct TokenOptions {
   std::string tenant, description, token;
   std::int64_t id = 0;
+  double expires_in_days = 0;  // 0: never
 };
 
 int create_token(const std::string& db, const TokenOptions& t) {
@@ -68,7 +69,8 @@ int create_token(const std::string& db, const TokenOptions& t) {
   }
   storage::ConnectionPool pool(db, 1);
   storage::SurveyStore surveys(pool);
-  std::printf("%s\n", surveys.issue_token(tenant_named(pool, surveys, t.tenant), t.description).c_str());
+  std::printf("%s\n",
+              surveys.issue_token(tenant_named(pool, surveys, t.tenant), t.description, t.expires_in_days * 86400).c_str());
   return 0;
 }
 
@@ -99,11 +101,11 @@ std::string utc(double seconds) {
 int list_tokens(const std::string& db, const TokenOptions& t) {
   storage::ConnectionPool pool(db, 1);
   storage::SurveyStore surveys(pool);
-  std::printf("%6s  %-20s  %-20s  %-20s  %s\n", "id", "tenant", "created", "revoked", "description");
+  std::printf("%6s  %-20s  %-20s  %-20s  %-20s  %s\n", "id", "tenant", "created", "expires", "revoked", "description");
   for (const storage::TokenInfo& token : surveys.list_tokens(t.tenant.empty() ? std::nullopt : std::optional(t.tenant)))
-    std::printf("%6lld  %-20s  %-20s  %-20s  %s\n", static_cast<long long>(token.id), token.tenant.c_str(),
-                utc(token.created_at).c_str(), token.revoked_at ? utc(*token.revoked_at).c_str() : "-",
-                token.description.c_str());
+    std::printf("%6lld  %-20s  %-20s  %-20s  %-20s  %s\n", static_cast<long long>(token.id), token.tenant.c_str(),
+                utc(token.created_at).c_str(), token.expires_at ? utc(*token.expires_at).c_str() : "never",
+                token.revoked_at ? utc(*token.revoked_at).c_str() : "-", token.description.c_str());
   return 0;
 }
 
@@ -256,6 +258,8 @@ int main(int argc, char** argv) {
   add_db_option(create);
   create->add_option("--tenant", t.tenant, "tenant name")->required();
   create->add_option("--description", t.description, "what the token is for");
+  create->add_option("--expires-in-days", t.expires_in_days, "refuse the token after this many days (default: never)")
+      ->check(CLI::Range(0.0, 36500.0));
   CLI::App* revoke = token->add_subcommand("revoke", "revoke a token: it is refused from now on");
   add_db_option(revoke);
   revoke->add_option("--id", t.id, "the token's id, from token list");

@@ -111,21 +111,27 @@ std::int64_t SurveyStore::create_tenant(const std::string& name) {
   return connection->exec("INSERT INTO tenants (name) VALUES ($1) RETURNING id", {name}).int64(0, 0);
 }
 
-std::string SurveyStore::issue_token(std::int64_t tenant_id, const std::string& description) {
+std::string SurveyStore::issue_token(std::int64_t tenant_id, const std::string& description, double valid_for_s) {
+  if (!(valid_for_s >= 0)) throw std::invalid_argument("a token's validity must be positive seconds, or 0 for none");
   Sha256 secret{};
   if (RAND_bytes(secret.data(), static_cast<int>(secret.size())) != 1)
     throw std::runtime_error("no random bytes for a token");
   std::string token = "bst_" + hex(secret);
   auto connection = pool_.acquire();
-  connection->exec("INSERT INTO api_tokens (tenant_id, token_sha256, description) VALUES ($1, $2, $3)",
-                   {tenant_id, token_hash(token), description});
+  std::optional<double> valid_for;
+  if (valid_for_s > 0) valid_for = valid_for_s;
+  connection->exec("INSERT INTO api_tokens (tenant_id, token_sha256, description, expires_at)"
+                   " VALUES ($1, $2, $3, now() + make_interval(secs => $4))",
+                   {tenant_id, token_hash(token), description, valid_for});
   return token;
 }
 
 std::optional<std::int64_t> SurveyStore::tenant_of_token(const std::string& token) {
   auto connection = pool_.acquire();
   Result row = connection->exec(
-      "SELECT tenant_id FROM api_tokens WHERE token_sha256 = $1 AND revoked_at IS NULL", {token_hash(token)});
+      "SELECT tenant_id FROM api_tokens WHERE token_sha256 = $1 AND revoked_at IS NULL"
+      " AND (expires_at IS NULL OR expires_at > now())",
+      {token_hash(token)});
   if (row.rows() == 0) return std::nullopt;
   return row.int64(0, 0);
 }
@@ -148,14 +154,16 @@ std::vector<TokenInfo> SurveyStore::list_tokens(const std::optional<std::string>
   auto connection = pool_.acquire();
   Result rows = connection->exec(
       "SELECT t.id, n.name, t.description, extract(epoch FROM t.created_at)::float8,"
-      " extract(epoch FROM t.revoked_at)::float8 FROM api_tokens t JOIN tenants n ON n.id = t.tenant_id"
+      " extract(epoch FROM t.revoked_at)::float8, extract(epoch FROM t.expires_at)::float8"
+      " FROM api_tokens t JOIN tenants n ON n.id = t.tenant_id"
       " WHERE $1::text IS NULL OR n.name = $1 ORDER BY t.id",
       {tenant});
   std::vector<TokenInfo> tokens;
   for (int row = 0; row < rows.rows(); ++row) {
     TokenInfo token{rows.int64(row, 0), std::string(rows.text(row, 1)), std::string(rows.text(row, 2)),
-                    rows.float8(row, 3), std::nullopt};
+                    rows.float8(row, 3), std::nullopt, std::nullopt};
     if (!rows.is_null(row, 4)) token.revoked_at = rows.float8(row, 4);
+    if (!rows.is_null(row, 5)) token.expires_at = rows.float8(row, 5);
     tokens.push_back(std::move(token));
   }
   return tokens;

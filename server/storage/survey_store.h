@@ -76,6 +76,7 @@ struct TokenInfo {
   std::string description;
   double created_at = 0;  // seconds since the epoch
   std::optional<double> revoked_at;
+  std::optional<double> expires_at;
 };
 
 class SurveyStore {
@@ -87,8 +88,9 @@ class SurveyStore {
   std::int64_t create_tenant(const std::string& name);
   // A new random token for the tenant; only its hash is stored, so this is the one chance to
   // see it.
-  std::string issue_token(std::int64_t tenant_id, const std::string& description);
-  std::optional<std::int64_t> tenant_of_token(const std::string& token);  // nullopt: unknown or revoked
+  // `valid_for_s` > 0: the token expires that many seconds from now; 0: it does not expire.
+  std::string issue_token(std::int64_t tenant_id, const std::string& description, double valid_for_s = 0);
+  std::optional<std::int64_t> tenant_of_token(const std::string& token);  // nullopt: unknown, revoked or expired
   bool revoke_token(const std::string& token);
   bool revoke_token(std::int64_t token_id);  // by the id that list_tokens shows
   // Every token, or a tenant's, oldest first.

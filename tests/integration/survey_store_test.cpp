@@ -113,6 +113,27 @@ TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
   EXPECT_EQ(store.tenant_of_token(second), std::nullopt);
 }
 
+TEST(SurveyStore, ATokenIssuedForAWhileIsRefusedOnceItExpires) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t acme = store.create_tenant("acme");
+  const std::string day = store.issue_token(acme, "one day", 86400);
+  const std::string forever = store.issue_token(acme, "no expiry");
+  EXPECT_EQ(store.tenant_of_token(day), acme);
+  const std::vector<TokenInfo> listed = store.list_tokens();
+  ASSERT_EQ(listed.size(), 2u);
+  ASSERT_TRUE(listed[0].expires_at);
+  EXPECT_NEAR(*listed[0].expires_at - listed[0].created_at, 86400, 1);
+  EXPECT_FALSE(listed[1].expires_at);
+  // A day later, as far as the token is concerned.
+  Connection connection(db.conninfo());
+  connection.exec("UPDATE api_tokens SET expires_at = now() - interval '1 second' WHERE description = 'one day'");
+  EXPECT_EQ(store.tenant_of_token(day), std::nullopt);
+  EXPECT_EQ(store.tenant_of_token(forever), acme);
+  EXPECT_THROW(store.issue_token(acme, "negative", -5), std::invalid_argument);
+}
+
 TEST(SurveyStore, TheLatestValidationIsKept) {
   testing::FreshDatabase db;
   ConnectionPool pool(db.conninfo(), 1);
