@@ -15,6 +15,8 @@
 
 #include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/impl/server_builder_option.h>
+#include <grpcpp/impl/server_builder_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/grpcpp.h>
 
@@ -109,12 +111,22 @@ int list_tokens(const std::string& db, const TokenOptions& t) {
   return 0;
 }
 
+// Removes gRPC's reflection plugin from a server builder.
+class WithoutReflection : public grpc::ServerBuilderOption {
+ public:
+  void UpdateArguments(grpc::ChannelArguments*) override {}
+  void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
+    std::erase_if(*plugins, [](const auto& plugin) { return plugin->name() == "proto_server_reflection"; });
+  }
+};
+
 struct ServeOptions {
   std::string listen;
   std::string db;
   bool migrate = false;
   int workers = 1;
   std::string dev_tenant;
+  bool reflection = false;
   std::string scratch;
   int lease_seconds = 30;
   int statement_timeout_seconds = 60;
@@ -172,6 +184,9 @@ int serve(const ServeOptions& o) {
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(o.listen, server_credentials(o), &port);
+  // Reflection lists every method to anyone who connects, token or not: served on a development
+  // server (a dev tenant) or when the operator asks for it. Linking it registers it everywhere.
+  if (!o.reflection && o.dev_tenant.empty()) builder.SetOption(std::make_unique<WithoutReflection>());
   builder.RegisterService(&survey_service);
   builder.RegisterService(&job_service);
   builder.RegisterService(&map_service);
@@ -231,6 +246,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 256))->envname("BATHYSLAM_WORKERS");
   app.add_option("--dev-tenant", o.dev_tenant, "callers without a token act as this tenant (created if needed)")
       ->envname("BATHYSLAM_DEV_TENANT");
+  app.add_flag("--reflection", o.reflection, "serve gRPC reflection without a dev tenant too (it needs no token)");
   app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));

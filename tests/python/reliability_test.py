@@ -112,6 +112,30 @@ class UploadThroughRestartTest(OutageTest):
         self.assertEqual(stored, f"{hashlib.sha256(read('pings.csv')).hexdigest()}|{len(read('pings.csv'))}|t")
 
 
+class ReflectionTest(unittest.TestCase):
+    """Reflection asks no token, so only a development server (or one told to) offers it."""
+
+    @staticmethod
+    def list_services(server):
+        call = server.channel.stream_stream("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo")
+        # ServerReflectionRequest{list_services: ""}, field 7, serialised by hand.
+        return list(call(iter([b"\x3a\x00"]), timeout=10))
+
+    def test_reflection_only_on_a_development_server_or_when_asked(self):
+        for args, dev_tenant, offered in (([], None, False), (["--reflection"], None, True), ([], "python", True)):
+            server = Server(args=args, dev_tenant=dev_tenant)
+            self.addCleanup(server.stop)
+            if offered:
+                self.assertEqual(len(self.list_services(server)), 1, (args, dev_tenant))
+            else:
+                with self.assertRaises(grpc.RpcError) as refused:
+                    self.list_services(server)
+                self.assertEqual(refused.exception.code(), grpc.StatusCode.UNIMPLEMENTED)
+                with self.assertRaises(grpc.RpcError) as unknown:  # and the API wants a token
+                    server.jobs.ListJobs(job_pb2.ListJobsRequest(), timeout=10)
+                self.assertEqual(unknown.exception.code(), grpc.StatusCode.UNAUTHENTICATED)
+
+
 class KilledServerTest(unittest.TestCase):
     """Two servers on one database; the one running a job is killed outright (SIGKILL: no
     give-back). The other reaps the job once its lease expires and finishes it with the poses of

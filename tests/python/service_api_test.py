@@ -45,12 +45,13 @@ class Server:
     """bathyslam-server on a database of its own, on a free port."""
     count = 0
 
-    def __init__(self, cluster=None, args=(), db=None):
-        """`args`: more server options; `db`: another Server's database, shared (not dropped here)."""
+    def __init__(self, cluster=None, args=(), db=None, dev_tenant="python"):
+        """`args`: more server options; `db`: another Server's database, shared (not dropped here);
+        `dev_tenant`: None for a server that asks every caller for a token."""
         pg_sh, cluster = ENV["PG_SH"], cluster or ENV["BATHYSLAM_TEST_PG"]
         Server.count += 1
         self.db = db or f"service_api_{os.getpid()}_{Server.count}"
-        self.args, self.owns_db = list(args), db is None
+        self.args, self.owns_db = list(args) + (["--dev-tenant", dev_tenant] if dev_tenant else []), db is None
         self.admin = subprocess.run(["bash", pg_sh, "url", cluster], capture_output=True, text=True, check=True).stdout.strip()
         self.url = subprocess.run(["bash", pg_sh, "url", cluster, self.db], capture_output=True, text=True, check=True).stdout.strip()
         if self.owns_db:
@@ -61,7 +62,7 @@ class Server:
     def start(self):
         """A server process on this database (again, after halt())."""
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
-                                         "--workers", "1", "--dev-tenant", "python", *self.args], stdout=subprocess.PIPE,
+                                         "--workers", "1", *self.args], stdout=subprocess.PIPE,
                                         stderr=self.log, text=True)
         line = self.process.stdout.readline()
         match = re.search(r"listening on (\S+)", line)
