@@ -15,7 +15,12 @@ nlohmann::json parse_bounded_json(std::string_view text, const JsonLimits& limit
       throw JsonLimitError("nested deeper than " + std::to_string(limits.max_depth) + " levels");
     return true;
   };
-  return nlohmann::json::parse(text, guard);
+  try {
+    return nlohmann::json::parse(text, guard);
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number beyond a double's range ("6e524") is a limit too, not a crash (found by fuzzing).
+    throw JsonLimitError(std::string("a number out of range: ") + e.what());
+  }
 }
 
 }  // namespace bathyslam

@@ -215,8 +215,8 @@ class HostileInputTest(unittest.TestCase):
             (stream(data=b"x" * ((1 << 20) + 1)), grpc.StatusCode.INVALID_ARGUMENT, "data: a chunk holds at most 1 MiB"),
             (stream(size=10, data=b"x" * 20), grpc.StatusCode.INVALID_ARGUMENT,
              "data: 'nav.csv' was declared 10 bytes; this chunk would end at 20"),
-            (stream(name="extra.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: 'extra.csv' is not a bundle file"),
-            (stream(name="../nav.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: '../nav.csv' is not a bundle file"),
+            (stream(name="extra.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: 'extra.csv' is not a survey file"),
+            (stream(name="../nav.csv"), grpc.StatusCode.INVALID_ARGUMENT, "file_name: '../nav.csv' is not a survey file"),
         ]
         before = self.fingerprint()
         for requests, code, message in cases:

@@ -170,6 +170,14 @@ TEST(BoundedJson, LimitsAreExactAndSyntaxErrorsStayParseErrors) {
   EXPECT_THROW(parse_bounded_json(R"({"a": {"b": {"c": {}}}})", limits), JsonLimitError);
   EXPECT_THROW(parse_bounded_json(std::string(101, ' ') + "1", limits), JsonLimitError);
   EXPECT_THROW(parse_bounded_json("[1,", limits), nlohmann::json::parse_error);
+  // A number no double holds: refused like a limit, never an exception the callers do not expect
+  // (the bundle fuzzer's crash-d3cb2ee8: survey.json "6e524").
+  EXPECT_THROW(parse_bounded_json("6e524", limits), JsonLimitError);
+}
+
+TEST_F(BundleTest, ANumberBeyondADoubleInSurveyJsonIsAProblemNotACrash) {
+  write_lines(kSurveyJsonFile, {R"({"name": "x", "crs": "EPSG:32651", "sonar": {"a": 6e524}})"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: a number out of range"));
 }
 
 TEST_F(BundleTest, ALineTooLongIsNamedAndEndsTheFile) {
