@@ -1,0 +1,179 @@
+#!/usr/bin/env python3
+"""Tenant isolation, RPC by RPC: every method of every bathyslam service, read from the
+service descriptors (a new RPC without a case here fails the test), called with no token, a
+wrong token, a revoked token, another tenant's token and the owner's token. The first three
+are UNAUTHENTICATED; another tenant's token finds nothing of the owner's (NOT_FOUND naming the
+id, or a list without the owner's ids), never PERMISSION_DENIED, which would tell that the id
+exists; only the owner's token gets the owner's data. After every refused call the database is
+unchanged. The same environment as service_api_test.py (set by ctest)."""
+import subprocess
+import unittest
+
+import grpc
+from google.protobuf import descriptor_pb2, symbol_database
+
+from service_api_test import (ENV, Server, job_pb2, map_pb2, psql, read, ready_survey, survey_pb2,
+                              upload_requests)
+from reliability_test import final_state
+
+SERVICES = [module.DESCRIPTOR.services_by_name[name]
+            for module, name in ((survey_pb2, "SurveyService"), (job_pb2, "JobService"), (map_pb2, "MapService"))]
+NOBODY = ("no token", "wrong token", "revoked token")
+
+
+def token(db_url, *args):
+    return subprocess.run([ENV["BATHYSLAM_SERVER_BIN"], "token", *args, "--db", db_url], check=True, text=True,
+                          capture_output=True).stdout.strip()
+
+
+def method_kind(method):
+    """(client streaming, server streaming) of a method descriptor."""
+    proto = descriptor_pb2.MethodDescriptorProto()
+    method.CopyToProto(proto)
+    return proto.client_streaming, proto.server_streaming
+
+
+def message_class(descriptor):
+    return symbol_database.Default().GetSymbol(descriptor.full_name)
+
+
+class IsolationMatrixTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        # The owner's data is made on a development server (its dev tenant is the owner), which
+        # then restarts asking every caller for a token.
+        cls.server = Server(dev_tenant="owner")
+        s = cls.server
+        cls.ready = ready_survey(s.surveys, "ready")
+        cls.doomed = s.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="doomed"), timeout=30).id
+        cls.uploading = s.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="uploading"), timeout=30).id
+        job = s.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=cls.ready, configuration="odometry"), timeout=30)
+        assert final_state(s, job.id).state == job_pb2.SUCCEEDED, s.server_log()
+        cls.job = job.id
+        cls.tile = next(t for t in s.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30).tiles)
+        s.halt()
+        s.args = []
+        s.start()
+        cls.tokens = {"owner": token(s.url, "create", "--tenant", "owner"),
+                      "another tenant": token(s.url, "create", "--tenant", "intruder"),
+                      "wrong token": "bst_" + "0" * 40}
+        revoked = token(s.url, "create", "--tenant", "owner", "--description", "to revoke")
+        listed = token(s.url, "list", "--tenant", "owner")
+        token(s.url, "revoke", "--id", next(line.split()[0] for line in listed.splitlines() if line.endswith("to revoke")))
+        cls.tokens["revoked token"] = revoked
+        cls.owner_tenant, cls.intruder_tenant = (int(psql(s.url, f"SELECT id FROM tenants WHERE name = '{name}'"))
+                                                 for name in ("owner", "intruder"))
+        cls.created = 0
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+
+    def request(self, method):
+        """The method's request (or request stream) aimed at the owner's data. Fields are filled
+        by name; a method this table does not know fails the test with its name."""
+        self.__class__.created += 1
+        cases = {
+            "CreateSurvey": dict(name=f"created {self.created}"),
+            "UploadFile": None,
+            "GetUploadStatus": dict(survey_id=self.uploading, file_name="survey.json"),
+            "FinalizeSurvey": dict(survey_id=self.ready),
+            "GetSurvey": dict(survey_id=self.ready),
+            "ListSurveys": dict(),
+            "DeleteSurvey": dict(survey_id=self.doomed),
+            "SubmitJob": dict(survey_id=self.ready, configuration="odometry"),
+            "GetJob": dict(job_id=self.job),
+            "WatchJob": dict(job_id=self.job),
+            "CancelJob": dict(job_id=self.job),
+            "ListJobs": dict(),
+            "GetReport": dict(job_id=self.job),
+            "GetMapInfo": dict(job_id=self.job),
+            "GetTile": dict(job_id=self.job, level=self.tile.level, col=self.tile.col, row=self.tile.row,
+                            format=map_pb2.GEOTIFF),
+            "GetMap": dict(job_id=self.job),
+            "GetTrajectory": dict(job_id=self.job),
+        }
+        self.assertIn(method.name, cases, f"{method.full_name} has no case in the isolation matrix")
+        if method.name == "UploadFile":
+            return upload_requests(self.uploading, "survey.json", read("survey.json"))
+        return message_class(method.input_type)(**cases[method.name])
+
+    def call(self, method, who):
+        """(status code, details, reply messages) of one call as `who`."""
+        channel = self.server.channel
+        path = f"/{method.containing_service.full_name}/{method.name}"
+        client_streaming, server_streaming = method_kind(method)
+        kind = {(False, False): channel.unary_unary, (False, True): channel.unary_stream,
+                (True, False): channel.stream_unary}[(client_streaming, server_streaming)]
+        stub = kind(path, request_serializer=lambda m: m.SerializeToString(),
+                    response_deserializer=message_class(method.output_type).FromString)
+        metadata = [] if who == "no token" else [("authorization", "Bearer " + self.tokens[who])]
+        try:
+            reply = stub(self.request(method), metadata=metadata, timeout=60)
+            return grpc.StatusCode.OK, "", list(reply) if server_streaming else [reply]
+        except grpc.RpcError as error:
+            return error.code(), error.details(), []
+
+    def fingerprint(self, leave_out_tenant=None):
+        """Row counts and checksums of every table (leaving out one tenant's surveys: what another
+        tenant may create in its own space). Bytes are hashed, not printed."""
+        columns = psql(self.server.url, "SELECT table_name, column_name, data_type FROM information_schema.columns"
+                                        " WHERE table_schema = 'public' ORDER BY table_name, ordinal_position")
+        tables = {}
+        for line in columns.splitlines():
+            table, column, kind = line.split("|")
+            tables.setdefault(table, []).append(f"md5(t.{column})" if kind == "bytea" else f"t.{column}::text")
+        parts = []
+        for table, values in tables.items():
+            where = f" WHERE tenant_id <> {leave_out_tenant}" if leave_out_tenant and table == "surveys" else ""
+            row = f"md5(concat_ws('|', {', '.join(values)}))"
+            parts.append(f"(SELECT '{table}:' || count(*) || ':' || md5(coalesce(string_agg({row}, '' ORDER BY {row}), ''))"
+                         f" FROM {table} t{where})")
+        return psql(self.server.url, "SELECT " + " || ' ' || ".join(parts))
+
+    def owner_ids(self):
+        surveys = {s.id for s in self.server.surveys.ListSurveys(
+            survey_pb2.ListSurveysRequest(), metadata=[("authorization", "Bearer " + self.tokens["owner"])], timeout=30).surveys}
+        return surveys | {self.job}
+
+    def listed(self, replies):
+        return {item.id for reply in replies for item in getattr(reply, "surveys", getattr(reply, "jobs", []))}
+
+    def test_every_rpc_against_every_caller(self):
+        methods = [method for service in SERVICES for method in service.methods]
+        self.assertGreaterEqual(len(methods), 17)
+        # Nothing a refused caller sends changes the owner's data or anyone else's; what another
+        # tenant creates in its own space (CreateSurvey) is left out of the comparison.
+        before = self.fingerprint(leave_out_tenant=self.intruder_tenant)
+        for method in methods:
+            for who in NOBODY:
+                with self.subTest(method=method.name, caller=who):
+                    code, details, _ = self.call(method, who)
+                    self.assertEqual(code, grpc.StatusCode.UNAUTHENTICATED, details)
+                    self.assertIn("authorization", details)
+                    self.assertEqual(self.fingerprint(leave_out_tenant=self.intruder_tenant), before,
+                                     "a refused call changed the database")
+            with self.subTest(method=method.name, caller="another tenant"):
+                code, details, replies = self.call(method, "another tenant")
+                self.assertNotEqual(code, grpc.StatusCode.PERMISSION_DENIED, details)
+                if method.name in ("ListSurveys", "ListJobs", "CreateSurvey"):
+                    self.assertEqual(code, grpc.StatusCode.OK, details)
+                    self.assertFalse(self.listed(replies) & self.owner_ids(), "another tenant lists the owner's data")
+                else:
+                    self.assertEqual(code, grpc.StatusCode.NOT_FOUND, details)
+                    self.assertRegex(details, r"^(survey_id|job_id): no (survey|job) \d+$")
+                self.assertEqual(self.fingerprint(leave_out_tenant=self.intruder_tenant), before,
+                                 "another tenant's call changed the database")
+        # Then the owner, who may change things: DeleteSurvey last, as it removes what it is aimed at.
+        for method in sorted(methods, key=lambda method: method.name == "DeleteSurvey"):
+            with self.subTest(method=method.name, caller="owner"):
+                code, details, replies = self.call(method, "owner")
+                # A finished job cannot be cancelled: refused for what it is, not for who asks.
+                expected = grpc.StatusCode.FAILED_PRECONDITION if method.name == "CancelJob" else grpc.StatusCode.OK
+                self.assertEqual(code, expected, details)
+                if method.name in ("ListSurveys", "ListJobs"):
+                    self.assertTrue(self.listed(replies) & self.owner_ids(), f"{method.name} misses the owner's data")
+        self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
