@@ -19,8 +19,8 @@ namespace {
 
 std::string quoted(std::string_view text) {
   constexpr std::size_t kMax = 80;
-  if (text.size() > kMax) return "'" + std::string(text.substr(0, kMax)) + "...'";
-  return "'" + std::string(text) + "'";
+  if (text.size() > kMax) return "'" + printable(text.substr(0, kMax)) + "...'";
+  return "'" + printable(text) + "'";
 }
 
 // Line (1-based) of the first occurrence of "key" in a JSON text, so a problem with a field of

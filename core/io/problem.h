@@ -2,6 +2,7 @@
 // A problem found in an input: where it is (file, line, field) and what is wrong.
 #include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace bathyslam {
@@ -40,5 +41,10 @@ class ProblemList {
   std::vector<Problem> problems_;
   std::vector<std::pair<std::string, std::size_t>> dropped_;  // file, count
 };
+
+// `text` as printable UTF-8: control characters and bytes that are not UTF-8 become "\xNN".
+// Input quoted into a message passes through this, so that a file of NUL bytes or Latin-1 makes
+// a message every terminal, JSON encoder and database column can hold.
+std::string printable(std::string_view text);
 
 }  // namespace bathyslam

@@ -1,5 +1,7 @@
 #include "server/services/survey_service.h"
 
+#include <cstring>
+
 #include "core/fuse/fuse.h"
 #include "core/fuse/map_extent.h"
 #include "core/io/bounded_json.h"
@@ -68,8 +70,57 @@ nlohmann::json to_json(const Problem& problem) {
   return {{"severity", problem.severity == Problem::Severity::kWarning ? "warning" : "error"},
           {"file", problem.file},
           {"line", problem.line},
-          {"field", problem.field},
-          {"message", problem.message}};
+          {"field", printable(problem.field)},
+          {"message", printable(problem.message)}};
+}
+
+// The first message declares the file and carries its first chunk: checked whole before the
+// upload is declared, so that a refused stream leaves nothing behind.
+void check_declaration(const v1::UploadFileRequest& message, const Limits& limits) {
+  const std::string& name = message.file_name();
+  if (!storage::is_bundle_file(name))
+    throw invalid("file_name", "'" + name + "' is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
+  if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
+  if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
+  if (message.offset() < 0) throw invalid("offset", "must not be negative");
+  if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
+  if (message.offset() + static_cast<std::int64_t>(message.data().size()) > message.size_bytes())
+    throw invalid("data", "'" + name + "' was declared " + std::to_string(message.size_bytes()) +
+                              " bytes; this chunk would end at " +
+                              std::to_string(message.offset() + static_cast<std::int64_t>(message.data().size())));
+  if (message.size_bytes() > limits.max_file_bytes)
+    throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
+                                                            " is over this server's limit of " +
+                                                            std::to_string(limits.max_file_bytes));
+  if (name == kSurveyJsonFile && message.size_bytes() > static_cast<std::int64_t>(kSurveyJsonLimits.max_bytes))
+    throw invalid("size_bytes", "survey.json is at most " + std::to_string(kSurveyJsonLimits.max_bytes) + " bytes, not " +
+                                    std::to_string(message.size_bytes()));
+}
+
+// Where the declared upload resumes: the committed bytes of the same declaration, or 0 for a new
+// (or changed) one. A first chunk anywhere else is refused before the declaration is stored.
+void check_first_offset(storage::SurveyStore& surveys, std::int64_t survey_id, const v1::UploadFileRequest& message) {
+  const auto existing = surveys.upload_state(survey_id, message.file_name());
+  const bool resumed = existing && existing->size_bytes == message.size_bytes() &&
+                       std::memcmp(existing->sha256.data(), message.sha256().data(), existing->sha256.size()) == 0;
+  const std::int64_t committed = resumed ? existing->committed_bytes : 0;
+  if (message.offset() != committed)
+    throw Refusal(grpc::StatusCode::ABORTED, "offset: " + std::to_string(message.offset()) + " but " + std::to_string(committed) +
+                                                 " bytes of '" + message.file_name() + "' are committed; resume there");
+}
+
+// Later messages carry chunks of the same file: one that names another file or survey, changes
+// the declaration or carries nothing is a client error, not something to guess about.
+void check_continuation(const v1::UploadFileRequest& first, const v1::UploadFileRequest& message) {
+  if (message.survey_id() != 0 && message.survey_id() != first.survey_id())
+    throw invalid("survey_id", "a stream uploads to one survey; a later message names survey " + std::to_string(message.survey_id()));
+  if (!message.file_name().empty() && message.file_name() != first.file_name())
+    throw invalid("file_name", "a stream uploads one file; a later message names '" + message.file_name() + "'");
+  if ((message.size_bytes() != 0 && message.size_bytes() != first.size_bytes()) ||
+      (!message.sha256().empty() && message.sha256() != first.sha256()))
+    throw invalid("size_bytes", "the declaration (size_bytes, sha256) is made once, in the first message");
+  if (message.data().empty()) throw invalid("data", "an empty chunk: only the first message may carry no data");
+  if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
 }
 
 }  // namespace
@@ -112,41 +163,28 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
                                        v1::UploadStatus* reply) {
   return handle("UploadFile", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
-    v1::UploadFileRequest message;
-    if (!reader->Read(&message)) throw invalid("survey_id", "the stream ended before its first message");
-    const std::int64_t survey_id = message.survey_id();
-    const std::string name = message.file_name();
+    v1::UploadFileRequest first;
+    if (!reader->Read(&first)) throw invalid("survey_id", "the stream ended before its first message");
+    const std::int64_t survey_id = first.survey_id();
+    const std::string& name = first.file_name();
     owned_survey(context_, tenant, survey_id);
-    if (!storage::is_bundle_file(name))
-      throw invalid("file_name", "'" + name + "' is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
-    if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
-    if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
-    // The first chunk is checked before the upload is declared, so that a refused stream leaves
-    // nothing behind; later ones are checked as they come (what came before them stays).
-    if (message.offset() < 0) throw invalid("offset", "must not be negative");
-    if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
-    if (message.offset() + static_cast<std::int64_t>(message.data().size()) > message.size_bytes())
-      throw invalid("data", "'" + name + "' was declared " + std::to_string(message.size_bytes()) +
-                                " bytes; this chunk would end at " +
-                                std::to_string(message.offset() + static_cast<std::int64_t>(message.data().size())));
-    if (message.size_bytes() > context_.limits.max_file_bytes)
-      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "size_bytes: " + std::to_string(message.size_bytes()) +
-                                                              " is over this server's limit of " +
-                                                              std::to_string(context_.limits.max_file_bytes));
-    if (name == kSurveyJsonFile && message.size_bytes() > static_cast<std::int64_t>(kSurveyJsonLimits.max_bytes))
-      throw invalid("size_bytes", "survey.json is at most " + std::to_string(kSurveyJsonLimits.max_bytes) + " bytes, not " +
-                                      std::to_string(message.size_bytes()));
+    check_declaration(first, context_.limits);
+    check_first_offset(context_.surveys, survey_id, first);
     storage::Sha256 digest{};
-    std::copy(message.sha256().begin(), message.sha256().end(), digest.begin());
+    std::copy(first.sha256().begin(), first.sha256().end(), digest.begin());
     try {
-      storage::UploadState state = context_.surveys.begin_upload(survey_id, name, message.size_bytes(), digest);
+      storage::UploadState state = context_.surveys.begin_upload(survey_id, name, first.size_bytes(), digest);
       // Each chunk is committed as it arrives: a cut stream keeps everything received before it.
-      do {
-        if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
-        if (message.data().empty()) continue;
+      auto append = [&](const v1::UploadFileRequest& message) {
         storage::Bytes data(message.data().begin(), message.data().end());
         state = context_.surveys.append_chunk(survey_id, name, message.offset(), data);
-      } while (reader->Read(&message));
+      };
+      if (!first.data().empty()) append(first);
+      v1::UploadFileRequest message;
+      while (reader->Read(&message)) {
+        check_continuation(first, message);
+        append(message);
+      }
       describe_upload(state, reply);
       if (state.complete) log("survey %lld: '%s' uploaded, %lld bytes", static_cast<long long>(survey_id), name.c_str(),
                               static_cast<long long>(state.size_bytes));

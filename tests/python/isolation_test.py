@@ -6,24 +6,18 @@ are UNAUTHENTICATED; another tenant's token finds nothing of the owner's (NOT_FO
 id, or a list without the owner's ids), never PERMISSION_DENIED, which would tell that the id
 exists; only the owner's token gets the owner's data. After every refused call the database is
 unchanged. The same environment as service_api_test.py (set by ctest)."""
-import subprocess
 import unittest
 
 import grpc
 from google.protobuf import descriptor_pb2, symbol_database
 
-from service_api_test import (ENV, Server, job_pb2, map_pb2, psql, read, ready_survey, survey_pb2,
-                              upload_requests)
+from service_api_test import (Server, database_fingerprint, job_pb2, map_pb2, psql, read, ready_survey, survey_pb2,
+                              token, upload_requests)
 from reliability_test import final_state
 
 SERVICES = [module.DESCRIPTOR.services_by_name[name]
             for module, name in ((survey_pb2, "SurveyService"), (job_pb2, "JobService"), (map_pb2, "MapService"))]
 NOBODY = ("no token", "wrong token", "revoked token")
-
-
-def token(db_url, *args):
-    return subprocess.run([ENV["BATHYSLAM_SERVER_BIN"], "token", *args, "--db", db_url], check=True, text=True,
-                          capture_output=True).stdout.strip()
 
 
 def method_kind(method):
@@ -114,22 +108,9 @@ class IsolationMatrixTest(unittest.TestCase):
         except grpc.RpcError as error:
             return error.code(), error.details(), []
 
-    def fingerprint(self, leave_out_tenant=None):
-        """Row counts and checksums of every table (leaving out one tenant's surveys: what another
-        tenant may create in its own space). Bytes are hashed, not printed."""
-        columns = psql(self.server.url, "SELECT table_name, column_name, data_type FROM information_schema.columns"
-                                        " WHERE table_schema = 'public' ORDER BY table_name, ordinal_position")
-        tables = {}
-        for line in columns.splitlines():
-            table, column, kind = line.split("|")
-            tables.setdefault(table, []).append(f"md5(t.{column})" if kind == "bytea" else f"t.{column}::text")
-        parts = []
-        for table, values in tables.items():
-            where = f" WHERE tenant_id <> {leave_out_tenant}" if leave_out_tenant and table == "surveys" else ""
-            row = f"md5(concat_ws('|', {', '.join(values)}))"
-            parts.append(f"(SELECT '{table}:' || count(*) || ':' || md5(coalesce(string_agg({row}, '' ORDER BY {row}), ''))"
-                         f" FROM {table} t{where})")
-        return psql(self.server.url, "SELECT " + " || ' ' || ".join(parts))
+    def fingerprint(self):
+        """The whole database but another tenant's surveys: what it may create in its own space."""
+        return database_fingerprint(self.server.url, {"surveys": f"tenant_id <> {self.intruder_tenant}"})
 
     def owner_ids(self):
         surveys = {s.id for s in self.server.surveys.ListSurveys(
@@ -144,14 +125,14 @@ class IsolationMatrixTest(unittest.TestCase):
         self.assertGreaterEqual(len(methods), 17)
         # Nothing a refused caller sends changes the owner's data or anyone else's; what another
         # tenant creates in its own space (CreateSurvey) is left out of the comparison.
-        before = self.fingerprint(leave_out_tenant=self.intruder_tenant)
+        before = self.fingerprint()
         for method in methods:
             for who in NOBODY:
                 with self.subTest(method=method.name, caller=who):
                     code, details, _ = self.call(method, who)
                     self.assertEqual(code, grpc.StatusCode.UNAUTHENTICATED, details)
                     self.assertIn("authorization", details)
-                    self.assertEqual(self.fingerprint(leave_out_tenant=self.intruder_tenant), before,
+                    self.assertEqual(self.fingerprint(), before,
                                      "a refused call changed the database")
             with self.subTest(method=method.name, caller="another tenant"):
                 code, details, replies = self.call(method, "another tenant")
@@ -162,7 +143,7 @@ class IsolationMatrixTest(unittest.TestCase):
                 else:
                     self.assertEqual(code, grpc.StatusCode.NOT_FOUND, details)
                     self.assertRegex(details, r"^(survey_id|job_id): no (survey|job) \d+$")
-                self.assertEqual(self.fingerprint(leave_out_tenant=self.intruder_tenant), before,
+                self.assertEqual(self.fingerprint(), before,
                                  "another tenant's call changed the database")
         # Then the owner, who may change things: DeleteSurvey last, as it removes what it is aimed at.
         for method in sorted(methods, key=lambda method: method.name == "DeleteSurvey"):

@@ -41,6 +41,32 @@ def psql(url, sql):
                           check=True).stdout.strip()
 
 
+def token(db_url, *args):
+    """`bathyslam-server token ARGS` on a database: a new token's secret, or the listing."""
+    return subprocess.run([ENV["BATHYSLAM_SERVER_BIN"], "token", *args, "--db", db_url], check=True, text=True,
+                          capture_output=True).stdout.strip()
+
+
+def database_fingerprint(url, rows_where=None):
+    """Row counts and checksums of every table, bytes hashed rather than printed. `rows_where`
+    maps a table to the SQL condition of the rows that count (e.g. another tenant's surveys left
+    out); "false" leaves a table out."""
+    rows_where = rows_where or {}
+    columns = psql(url, "SELECT table_name, column_name, data_type FROM information_schema.columns"
+                        " WHERE table_schema = 'public' ORDER BY table_name, ordinal_position")
+    tables = {}
+    for line in columns.splitlines():
+        table, column, kind = line.split("|")
+        tables.setdefault(table, []).append(f"md5(t.{column})" if kind == "bytea" else f"t.{column}::text")
+    parts = []
+    for table, values in tables.items():
+        row = f"md5(concat_ws('|', {', '.join(values)}))"
+        where = f" WHERE {rows_where[table]}" if table in rows_where else ""
+        parts.append(f"(SELECT '{table}:' || count(*) || ':' || md5(coalesce(string_agg({row}, '' ORDER BY {row}), ''))"
+                     f" FROM {table} t{where})")
+    return psql(url, "SELECT " + " || ' ' || ".join(parts))
+
+
 class Server:
     """bathyslam-server on a database of its own, on a free port."""
     count = 0
@@ -61,8 +87,9 @@ class Server:
 
     def start(self):
         """A server process on this database (again, after halt())."""
+        workers = [] if "--workers" in self.args else ["--workers", "1"]
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
-                                         "--workers", "1", *self.args], stdout=subprocess.PIPE,
+                                         *workers, *self.args], stdout=subprocess.PIPE,
                                         stderr=self.log, text=True)
         line = self.process.stdout.readline()
         match = re.search(r"listening on (\S+)", line)

@@ -195,6 +195,22 @@ TEST_F(BundleTest, NavHeaderMustBeExact) {
                         "expected exactly 'time,easting,northing,depth,roll,pitch,heading'"));
 }
 
+TEST_F(BundleTest, AHeaderOfControlBytesAndLatin1IsQuotedPrintably) {
+  replace_line(kNavFile, 1, std::string("ti\0me,\xe9" "asting\x01", 14));
+  // A database's text column and a JSON encoder refuse NUL and bytes that are not UTF-8.
+  EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv:1: header is 'ti\\x00me,\\xe9asting\\x01'"));
+}
+
+TEST(Printable, KeepsUtf8AndEscapesWhatIsNot) {
+  EXPECT_EQ(printable("500 m \xc3\x97 2 m, caf\xc3\xa9"), "500 m \xc3\x97 2 m, caf\xc3\xa9");
+  EXPECT_EQ(printable(std::string("a\0b\tc\x7f", 6)), "a\\x00b\\x09c\\x7f");
+  EXPECT_EQ(printable("\xe9t\xe9"), "\\xe9t\\xe9");          // Latin-1
+  EXPECT_EQ(printable("\xc0\xaf"), "\\xc0\\xaf");            // an overlong '/'
+  EXPECT_EQ(printable("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a UTF-16 surrogate
+  EXPECT_EQ(printable("\xf0\x9f\x8c\x8a"), "\xf0\x9f\x8c\x8a");  // U+1F30A, four bytes
+  EXPECT_EQ(printable("\xe2\x82"), "\\xe2\\x82");            // cut short at the end
+}
+
 TEST_F(BundleTest, NavNanIsNamedWithLineAndColumn) {
   replace_line(kNavFile, 3, "1720000000.5,nan,4630000.5,1.25,0.5,-0.25,89.875");
   EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv:3: easting: not finite: 'nan'"));
