@@ -26,6 +26,7 @@
 #include "server/services/job_service.h"
 #include "server/services/map_service.h"
 #include "server/services/survey_service.h"
+#include "server/services/token_gate.h"
 #include "server/storage/migrations.h"
 
 namespace {
@@ -184,9 +185,16 @@ int serve(const ServeOptions& o) {
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(o.listen, server_credentials(o), &port);
-  // Reflection lists every method to anyone who connects, token or not: served on a development
-  // server (a dev tenant) or when the operator asks for it. Linking it registers it everywhere.
-  if (!o.reflection && o.dev_tenant.empty()) builder.SetOption(std::make_unique<WithoutReflection>());
+  // Reflection is served on a development server (a dev tenant) or when the operator asks for
+  // it (linking it registers it everywhere), and asks for the API's token like every service
+  // but health: its own service asks for none.
+  if (!o.reflection && o.dev_tenant.empty()) {
+    builder.SetOption(std::make_unique<WithoutReflection>());
+  } else {
+    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> gates;
+    gates.push_back(std::make_unique<service::TokenGateFactory>(context, "/grpc.reflection."));
+    builder.experimental().SetInterceptorCreators(std::move(gates));
+  }
   builder.RegisterService(&survey_service);
   builder.RegisterService(&job_service);
   builder.RegisterService(&map_service);
@@ -246,7 +254,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 256))->envname("BATHYSLAM_WORKERS");
   app.add_option("--dev-tenant", o.dev_tenant, "callers without a token act as this tenant (created if needed)")
       ->envname("BATHYSLAM_DEV_TENANT");
-  app.add_flag("--reflection", o.reflection, "serve gRPC reflection without a dev tenant too (it needs no token)");
+  app.add_flag("--reflection", o.reflection, "serve gRPC reflection without a dev tenant too (to callers with a token)");
   app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));

@@ -10,7 +10,7 @@ Refusal invalid(const std::string& field, const std::string& message) {
   return Refusal(grpc::StatusCode::INVALID_ARGUMENT, field + ": " + message);
 }
 
-std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContext& call) {
+std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call) {
   const auto& metadata = call.client_metadata();
   const auto header = metadata.find("authorization");
   if (header == metadata.end()) {

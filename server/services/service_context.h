@@ -46,7 +46,7 @@ Refusal invalid(const std::string& field, const std::string& message);
 
 // The tenant of the caller: `authorization: Bearer <token>` metadata, or the dev tenant.
 // UNAUTHENTICATED otherwise.
-std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContext& call);
+std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call);
 
 // The survey / job if it exists and belongs to the tenant; NOT_FOUND otherwise (another
 // tenant's ids are indistinguishable from unknown ones).
