@@ -18,6 +18,10 @@ namespace bathyslam {
 struct FuseConfig {
   double resolution_m = 0.5;
   int min_soundings = 3;  // fewer soundings in a cell: NoData (as the consistency grid's minimum)
+  // The raster over the cells with data may hold at most this many cells (0: no limit). The
+  // survey's extent is checked before the pipeline; this holds the optimized poses to it too,
+  // should they scatter the soundings far beyond it.
+  std::uint64_t max_cells = 0;
 };
 
 // Accumulates soundings one cloud at a time, keeping a running mean and sum of squared
@@ -31,6 +35,7 @@ class GridFuser {
   void add(std::span<const Eigen::Vector3f> points, const Eigen::Isometry3d& pose);
 
   // The grid over the cells with at least `min_soundings` soundings (empty geometry if none).
+  // Throws std::length_error when it would exceed `max_cells` (or a raster's int size).
   GridRaster raster() const;
   std::uint64_t soundings() const { return soundings_; }
   // Cells held in memory (whole blocks), whatever the number of soundings added.

@@ -241,7 +241,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     event("map", 0, "fusing and tiling");
-    const MapProducts map = make_map_products(result, bundle.survey->metadata, FuseConfig{}, options_.scratch);
+    const MapProducts map =
+        make_map_products(result, bundle.survey->metadata, FuseConfig{.max_cells = options_.max_map_cells}, options_.scratch);
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });

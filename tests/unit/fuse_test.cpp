@@ -113,6 +113,22 @@ TEST(Fuse, CellsWithFewerThanTheMinimumSoundingsAreNoData) {
   EXPECT_FLOAT_EQ(lenient.count[0], 2.0f);
 }
 
+TEST(Fuse, ScatteredPosesAreRefusedBeforeTheRasterIsMade) {
+  // Two submaps, the second placed 300 km east and north: 3.6e11 cells at 0.5 m, never allocated.
+  SubmapSet set = set_of({Submap{}, Submap{}});
+  for (Submap& submap : set.submaps) submap.points = {{0.1f, 0.1f, -5}, {0.2f, 0.2f, -5}, {0.3f, 0.1f, -6}};
+  std::vector<Eigen::Isometry3d> poses = dr_poses(set);
+  poses[1].translation() += Eigen::Vector3d(300e3, 300e3, 0);
+  try {
+    fuse_submaps(set, poses, {.resolution_m = 0.5, .min_soundings = 3, .max_cells = 100'000'000});
+    FAIL() << "a map of 300 km was made";
+  } catch (const std::length_error& error) {
+    EXPECT_NE(std::string(error.what()).find("map: the soundings cover 300000 m × 300000 m: 360001200001 cells"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("over the limit of 100000000"), std::string::npos) << error.what();
+  }
+  EXPECT_EQ(fuse_submaps(set, dr_poses(set), {.resolution_m = 0.5, .min_soundings = 3, .max_cells = 1}).valid_cells(), 1u);
+}
+
 TEST(Fuse, MemoryFollowsTheAreaNotTheSoundings) {
   std::mt19937 rng(3);
   const Submap s = sample([](double, double) { return -10.0; }, 0, 0, 30, 100000, 0.05, Eigen::Isometry3d::Identity(), rng);
