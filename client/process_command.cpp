@@ -8,6 +8,7 @@
 #include "client/commands.h"
 #include "client/survey_options.h"
 #include "core/fuse/fuse.h"
+#include "core/fuse/map_resolution.h"
 #include "core/fuse/soundings_csv.h"
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
@@ -79,7 +80,9 @@ void run_process(const ProcessOptions& o) {
   }
   write_report_plots(result, o.out);
   const auto fuse_start = std::chrono::steady_clock::now();
-  const std::string map_files = write_map_products(result, survey.metadata, o.fuse, o.out).summary();
+  FuseConfig fuse = o.fuse;
+  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(survey, fuse.min_soundings);
+  const std::string map_files = write_map_products(result, survey.metadata, fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
   if (o.export_gsf) export_gsf(o, survey, corrected);
@@ -88,7 +91,7 @@ void run_process(const ProcessOptions& o) {
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");
     std::printf("soundings.csv: %llu corrected soundings\n", static_cast<unsigned long long>(n));
   }
-  std::printf("map %.2f m cells: %s (%.1f s)\n", o.fuse.resolution_m, map_files.c_str(), fuse_seconds);
+  std::printf("map %.2f m cells: %s (%.1f s)\n", fuse.resolution_m, map_files.c_str(), fuse_seconds);
   std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
               o.out.c_str());
 }
@@ -104,8 +107,10 @@ void add_process_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--set", options->sets, "override a parameter: key=value (repeatable)");
   cmd->add_option("--threads", options->threads, "registration threads (0: all cores)")->capture_default_str();
-  cmd->add_option("--resolution", options->fuse.resolution_m, "map cell size in metres")
-      ->check(CLI::Range(0.01, 100.0))
+  options->fuse.resolution_m = 0;
+  cmd->add_option("--resolution", options->fuse.resolution_m,
+                  "map cell size in metres (0: from the sounding density, 0.5 m or coarser)")
+      ->check(CLI::Range(0.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--min-soundings", options->fuse.min_soundings, "fewer soundings in a cell: no data")
       ->check(CLI::Range(1, 100000))

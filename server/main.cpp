@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
                  "seconds after which PostgreSQL cancels a statement of a request or a job")
       ->capture_default_str()->check(CLI::Range(1, 3600));
   app.add_option("--max-file-bytes", o.limits.max_file_bytes, "largest uploaded file")->capture_default_str();
-  app.add_option("--max-map-cells", o.limits.max_map_cells, "cells of one survey's map at 0.5 m; larger surveys are refused")
+  app.add_option("--max-map-cells", o.limits.max_map_cells, "cells of one survey's map at its resolution; larger surveys are refused")
       ->capture_default_str();
   app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
       ->capture_default_str()->check(CLI::PositiveNumber);

@@ -7,6 +7,7 @@
 
 #include "core/pipeline/pipeline.h"
 #include "core/fuse/map_extent.h"
+#include "core/fuse/map_resolution.h"
 #include "core/pipeline/report.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
@@ -221,8 +222,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       return storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
     });
     if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+    // The map's cells follow the soundings' density (0.5 m for a vehicle near the seabed).
+    const FuseConfig fuse{.resolution_m = auto_map_resolution(*bundle.survey, FuseConfig{}.min_soundings),
+                          .max_cells = options_.max_map_cells};
     // Finalize checked this too; a survey finalized before the limit existed is checked here.
-    if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, options_.max_map_cells))
+    if (auto problem = map_extent_problem(*bundle.survey, fuse.resolution_m, options_.max_map_cells))
       throw std::runtime_error(problem->to_string());
     event("load", 1, std::to_string(bundle.survey->pings.size()) + " pings");
 
@@ -241,8 +245,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     event("map", 0, "fusing and tiling");
-    const MapProducts map =
-        make_map_products(result, bundle.survey->metadata, FuseConfig{.max_cells = options_.max_map_cells}, options_.scratch);
+    const MapProducts map = make_map_products(result, bundle.survey->metadata, fuse, options_.scratch);
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });

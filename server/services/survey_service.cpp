@@ -4,6 +4,7 @@
 
 #include "core/fuse/fuse.h"
 #include "core/fuse/map_extent.h"
+#include "core/fuse/map_resolution.h"
 #include "core/io/bounded_json.h"
 #include "core/io/crs.h"
 #include "core/summary/survey_summary.h"
@@ -230,7 +231,8 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
       errors = true;
     }
     if (bundle.survey) {
-      if (auto problem = map_extent_problem(*bundle.survey, FuseConfig{}.resolution_m, context_.limits.max_map_cells)) {
+      if (auto problem = map_extent_problem(*bundle.survey, auto_map_resolution(*bundle.survey, FuseConfig{}.min_soundings),
+                                                context_.limits.max_map_cells)) {
         problems.push_back(to_json(*problem));
         errors = true;
       }

@@ -16,6 +16,19 @@ grep -q "longitude   -64.59707 .. -64.59051" "$work/ex1811.txt"
 grep -q "depth       1165.6 .. 2316.7 m" "$work/ex1811.txt"
 grep -q "(EPSG:32620)" "$work/ex1811.txt"
 "$BATHYSLAM" inspect "$gsfpy" | grep -q "pings       4 (0 ignored), 432-432 beams per ping"
+# A ship's deep-water file maps at a cell its soundings fill (one per ~350 m² here): at a fixed
+# 0.5 m no cell would hold the 3 soundings a cell needs, and there would be no map at all.
+"$BATHYSLAM" process "$ex1811" --config odometry --out "$work/ex1811" > "$work/ex1811.out" 2>&1
+grep -q "^map 64.00 m cells: map.tif" "$work/ex1811.out" || { cat "$work/ex1811.out"; exit 1; }
+gdalinfo -stats "$work/ex1811/map.tif" > "$work/ex1811.gdal" 2>/dev/null
+/usr/bin/python3 - "$work/ex1811.gdal" <<'PY'
+import re, sys
+text = open(sys.argv[1]).read()
+valid = float(re.search(r"STATISTICS_VALID_PERCENT=([0-9.]+)", text).group(1))
+low, high = (float(re.search(rf"STATISTICS_{k}=(-?[0-9.]+)", text).group(1)) for k in ("MINIMUM", "MAXIMUM"))
+assert valid > 25 and -2320 < low < high < -1165, (valid, low, high)
+PY
+"$BATHYSLAM" process "$ex1811" --config odometry --resolution 0.5 --out "$work/ex1811_fine" 2>&1 | grep -q "no map (no cell has enough soundings)"
 "$BATHYSLAM" inspect --json --crs EPSG:32619 "$gsfpy" "$ex1811" > "$work/both.json"
 /usr/bin/python3 - "$work/both.json" <<'PY'
 import json, sys

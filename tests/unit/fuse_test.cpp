@@ -1,4 +1,5 @@
 #include "core/fuse/fuse.h"
+#include "core/fuse/map_resolution.h"
 
 #include <gtest/gtest.h>
 
@@ -127,6 +128,55 @@ TEST(Fuse, ScatteredPosesAreRefusedBeforeTheRasterIsMade) {
     EXPECT_NE(std::string(error.what()).find("over the limit of 100000000"), std::string::npos) << error.what();
   }
   EXPECT_EQ(fuse_submaps(set, dr_poses(set), {.resolution_m = 0.5, .min_soundings = 3, .max_cells = 1}).valid_cells(), 1u);
+}
+
+// A survey sailing east at 1 m per ping, 101 beams across `swath` metres each ping.
+Survey straight_survey(int pings, double swath) {
+  Survey survey;
+  for (int i = 0; i <= pings; ++i) survey.nav.push_back({.time = double(i), .easting = double(i), .heading_deg = 90});
+  for (int i = 0; i < pings; ++i) {
+    survey.pings.push_back({double(i) + 0.5, static_cast<uint32_t>(survey.beams.size()), 101});
+    for (int b = 0; b <= 100; ++b)
+      survey.beams.push_back({static_cast<uint32_t>(b), 0, static_cast<float>(swath * (b / 100.0 - 0.5)), 10});
+  }
+  return survey;
+}
+
+TEST(MapResolution, TheCellFollowsTheSoundingDensity) {
+  // 101 soundings per 100 m² swept: a 4 m cell holds 16, the first of 0.5 · 2^k to hold 2 × 3.
+  const SweptArea sparse = swept_area(straight_survey(200, 100));
+  EXPECT_NEAR(sparse.track_m, 199, 1e-9);
+  EXPECT_NEAR(sparse.swath_m, 100, 1e-4);
+  EXPECT_NEAR(sparse.density_per_m2(), 200 * 101 / (199.0 * 100), 1e-9);
+  EXPECT_EQ(auto_map_resolution(straight_survey(200, 100), 3), 4.0);
+  EXPECT_EQ(auto_map_resolution(straight_survey(200, 10), 3), 1.0);  // 10 per m²: 0.5 m cells would hold 2.5
+  // A vehicle near the seabed (50 per m²; the simulator's 46): never finer than 0.5 m.
+  EXPECT_EQ(auto_map_resolution(straight_survey(200, 2), 3), 0.5);
+  EXPECT_EQ(auto_map_resolution(Survey{}, 3), 0.5);
+}
+
+TEST(MapResolution, AStrayFixOrAGapNeitherLengthensTheTrackNorCoarsensTheCells) {
+  // Coarser cells would let the extent check pass a survey with a fix 500 km away.
+  Survey stray = straight_survey(200, 100);
+  stray.nav[120].easting += 500e3;
+  EXPECT_NEAR(swept_area(stray).track_m, 199, 1e-9);
+  EXPECT_EQ(auto_map_resolution(stray, 3), 4.0);
+  // A second file an hour later and 330 km away: the pause is not sailed.
+  Survey apart = straight_survey(200, 100);
+  const Survey later = straight_survey(200, 100);
+  for (NavSample nav : later.nav) {
+    nav.time += 3600;
+    nav.easting += 330e3;
+    apart.nav.push_back(nav);
+  }
+  for (Ping ping : later.pings) {
+    ping.time += 3600;
+    ping.first_beam += static_cast<uint32_t>(apart.beams.size());
+    apart.pings.push_back(ping);
+  }
+  apart.beams.insert(apart.beams.end(), later.beams.begin(), later.beams.end());
+  EXPECT_NEAR(swept_area(apart).track_m, 398, 1e-9);
+  EXPECT_EQ(auto_map_resolution(apart, 3), 4.0);
 }
 
 TEST(Fuse, MemoryFollowsTheAreaNotTheSoundings) {

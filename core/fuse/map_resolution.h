@@ -1,0 +1,23 @@
+#pragma once
+// The map's cell size when the user gives none. A fixed 0.5 m suits a survey vehicle 10 m above
+// the seabed (tens of soundings per square metre) but leaves every cell of a ship's deep-water
+// survey empty (EX1811: 1.2–2.3 km down, 432 beams a ping every 6 s: no 0.5 m cell gets the 3
+// soundings a cell needs, and there is no map at all). The cell follows the
+// soundings instead: the finest of finest_m · 2^k at which an average cell of the swept area
+// holds twice `min_soundings` (twice: soundings thin out towards the swath's edges).
+#include "core/types/survey.h"
+
+namespace bathyslam {
+
+struct SweptArea {
+  double track_m = 0;        // distance sailed while pinging (see robust_track_length)
+  double swath_m = 0;        // median across-track width of a ping
+  double soundings = 0;
+  double density_per_m2() const;  // 0 when nothing was swept
+};
+
+SweptArea swept_area(const Survey& survey);
+
+double auto_map_resolution(const Survey& survey, int min_soundings, double finest_m = 0.5);
+
+}  // namespace bathyslam
