@@ -51,6 +51,7 @@ Refusal upload_refusal(const storage::UploadError& error) {
     case Kind::kFinalized:
     case Kind::kConflict: return Refusal(grpc::StatusCode::FAILED_PRECONDITION, error.what());
     case Kind::kBadOffset: return Refusal(grpc::StatusCode::ABORTED, error.what());
+    case Kind::kTooMany: return Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, error.what());
     case Kind::kChecksum:
     case Kind::kInvalid: break;
   }

@@ -338,6 +338,12 @@ UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string&
     UploadState state = upload_row(existing, 0);
     if (state.size_bytes == size_bytes && state.sha256 == digest) return state;  // a resumed upload
     connection->exec("DELETE FROM survey_files WHERE survey_id = $1 AND name = $2", {survey_id, name});
+  } else if (const std::int64_t files =
+                 connection->exec("SELECT count(*) FROM survey_files WHERE survey_id = $1", {survey_id}).int64(0, 0);
+             files >= kMaxFilesPerSurvey) {
+    // Counted under the survey's lock: concurrent uploads cannot pass the limit together.
+    throw UploadError(UploadError::Kind::kTooMany, "file_name: survey " + std::to_string(survey_id) + " holds " +
+                                                       std::to_string(files) + " files, the most a survey may hold");
   }
   Result created = connection->exec(
       "INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"

@@ -53,9 +53,13 @@ struct UploadState {
 };
 
 // Why an upload step was refused; the service turns the kind into a status code.
+// Files one survey may hold: the bundle's four, or a mission's GSF files (one a line, a few
+// hundred at most), with room to spare; not millions of rows from one hostile client.
+inline constexpr std::int64_t kMaxFilesPerSurvey = 1000;
+
 class UploadError : public std::runtime_error {
  public:
-  enum class Kind { kNotFound, kFinalized, kConflict, kBadOffset, kChecksum, kInvalid };
+  enum class Kind { kNotFound, kFinalized, kConflict, kBadOffset, kChecksum, kInvalid, kTooMany };
   UploadError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const { return kind_; }
 

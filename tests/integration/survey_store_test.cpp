@@ -76,6 +76,28 @@ TEST(SurveyStore, BadNamesAreRefusedBeforeAnythingIsWritten) {
   EXPECT_EQ(rows_under_surveys(db), 0);
 }
 
+TEST(SurveyStore, ASurveyHoldsAtMostItsLimitOfFiles) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "mission", {});
+  const auto files = [&] { return db.scalar("SELECT count(*) FROM survey_files"); };
+  db.scalar("WITH f AS (INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"
+            " SELECT " + std::to_string(survey) + ", 'line' || g || '.gsf', 0, sha256(''::bytea), 0, 0, true"
+            " FROM generate_series(1, " + std::to_string(kMaxFilesPerSurvey - 1) + ") g RETURNING 1) SELECT count(*) FROM f");
+  store.begin_upload(survey, "nav.csv", 3, sha256(bytes_of("abc")));  // the last one allowed
+  try {
+    store.begin_upload(survey, "pings.csv", 3, sha256(bytes_of("abc")));
+    FAIL() << "a survey took more than " << kMaxFilesPerSurvey << " files";
+  } catch (const UploadError& error) {
+    EXPECT_EQ(error.kind(), UploadError::Kind::kTooMany);
+    EXPECT_EQ(std::string(error.what()), "file_name: survey " + std::to_string(survey) + " holds 1000 files, the most a survey may hold");
+  }
+  // Declaring a file it holds again (resumed or replaced) adds none.
+  store.begin_upload(survey, "nav.csv", 4, sha256(bytes_of("abcd")));
+  EXPECT_EQ(files(), kMaxFilesPerSurvey);
+}
+
 TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
   testing::FreshDatabase db;
   ConnectionPool pool(db.conninfo(), 1);
