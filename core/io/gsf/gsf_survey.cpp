@@ -115,7 +115,8 @@ std::string iso_time(double t) {
 // Appends one ping's navigation and usable soundings to `survey`.
 class SurveyBuilder {
  public:
-  SurveyBuilder(Survey& survey, std::string crs) : survey_(survey), crs_(std::move(crs)) {}
+  SurveyBuilder(Survey& survey, std::string crs, bool keep_soundings)
+      : survey_(survey), crs_(std::move(crs)), keep_soundings_(keep_soundings) {}
 
   void add(const Ping& p, const std::string& where) {
     if (!projection_) {
@@ -142,11 +143,12 @@ class SurveyBuilder {
     bathyslam::Ping ping{p.time, static_cast<std::uint32_t>(survey_.beams.size()), 0};
     for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) {
       if (!usable_beam(p, b)) continue;
+      ++ping.beam_count;
+      if (!keep_soundings_) continue;
       const Eigen::Vector3d level(along_of(p, b), p.across_m[b], p.depth_m[b] - p.depth_corrector_m);
       const Eigen::Vector3d v = level_to_vehicle * level;
       survey_.beams.push_back({static_cast<std::uint32_t>(b), static_cast<float>(v.x()), static_cast<float>(v.y()),
                                static_cast<float>(v.z())});
-      ++ping.beam_count;
     }
     if (ping.beam_count > 0) survey_.pings.push_back(ping);
   }
@@ -154,6 +156,7 @@ class SurveyBuilder {
  private:
   Survey& survey_;
   std::string crs_;
+  bool keep_soundings_;
   std::unique_ptr<GeographicProjection> projection_;
 };
 
@@ -262,7 +265,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   if (files.empty()) throw std::runtime_error("no GSF file given");
   SurveyRead out;
   out.survey.metadata.name = files.front().stem().string();
-  SurveyBuilder survey(out.survey, options.crs);
+  SurveyBuilder survey(out.survey, options.crs, options.keep_soundings);
   MetadataBuilder metadata;
   for (const std::filesystem::path& path : files) {
     FileSource source(path);
