@@ -30,9 +30,11 @@ void inspect_bundle(const std::string& bundle, bool json) {
 }
 
 // GSF: what each file holds (pings, ignored pings, rejected beams, records), then the survey
-// bathyslam makes of them.
+// bathyslam makes of them, read without its soundings (memory: the navigation, not the beams).
 void inspect_gsf(const InspectOptions& o) {
-  const LoadedSurvey loaded = load_survey(o.survey.input());
+  SurveyInput input = o.survey.input();
+  input.keep_soundings = false;
+  const LoadedSurvey loaded = load_survey(input);
   const SurveySummary summary = summarize(loaded.survey);
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();

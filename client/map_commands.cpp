@@ -1,5 +1,6 @@
 // bathyslam tiles / map: download a job's map tiles (all, or those meeting a bounding box) and
-// the whole map as one Cloud Optimized GeoTIFF or BAG.
+// the whole map as one Cloud Optimized GeoTIFF or BAG, and the survey's pings with the corrected
+// navigation as GSF.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -19,7 +20,7 @@ struct MapOptions {
   std::int64_t job = 0;
   std::string out;
   std::string format = "geotiff";
-  std::string map_format = "cog";  // `map`: cog or bag
+  std::string map_format = "cog";  // `map`: cog, bag or gsf
   std::vector<double> bbox;  // min easting, min northing, max easting, max northing
 };
 
@@ -30,16 +31,22 @@ std::int64_t save(Reader& reader, const std::string& call, const std::filesystem
   const std::filesystem::path partial = path.string() + ".partial";
   std::ofstream out(partial, std::ios::binary);
   v1::DataChunk chunk;
-  std::int64_t size = 0;
+  std::int64_t size = 0, total = 0;
   while (reader->Read(&chunk)) {
     out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
     size += static_cast<std::int64_t>(chunk.data().size());
+    total = chunk.total_bytes();
   }
   out.close();
   const grpc::Status status = reader->Finish();
   if (!status.ok()) std::filesystem::remove(partial);
   check(call, status);
   if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  // A stream that ended early with an OK status must not pass for the whole file.
+  if (size != total) {
+    std::filesystem::remove(partial);
+    throw std::runtime_error(path.string() + ": received " + std::to_string(size) + " of " + std::to_string(total) + " bytes");
+  }
   std::filesystem::rename(partial, path);
   return size;
 }
@@ -99,7 +106,7 @@ void run_tiles(const MapOptions& o) {
 void run_map(const MapOptions& o) {
   v1::GetMapRequest request;
   request.set_job_id(o.job);
-  request.set_format(o.map_format == "bag" ? v1::BAG : v1::COG);
+  request.set_format(o.map_format == "bag" ? v1::BAG : o.map_format == "gsf" ? v1::GSF : v1::COG);
   auto context = o.remote.context();
   auto reader = v1::MapService::NewStub(o.remote.channel())->GetMap(context.get(), request);
   const std::int64_t size = save(reader, "GetMap", o.out);
@@ -119,12 +126,14 @@ void add_map_commands(CLI::App& app) {
   cmd->callback([tiles] { run_tiles(*tiles); });
 
   auto map = std::make_shared<MapOptions>();
-  cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF or BAG");
+  cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF or BAG, or its corrected GSF");
   cmd->add_option("job", map->job, "job id")->required();
-  cmd->add_option("--format", map->map_format, "cog (elevation, uncertainty, count) or bag (elevation, uncertainty)")
-      ->check(CLI::IsMember({"cog", "bag"}))
+  cmd->add_option("--format", map->map_format,
+                  "cog (elevation, uncertainty, count), bag (elevation, uncertainty) or gsf (the survey's pings "
+                  "with the corrected navigation)")
+      ->check(CLI::IsMember({"cog", "bag", "gsf"}))
       ->capture_default_str();
-  cmd->add_option("--out", map->out, "output file (.tif or .bag)")->required();
+  cmd->add_option("--out", map->out, "output file (.tif, .bag or .gsf)")->required();
   add_remote_options(cmd, map->remote);
   cmd->callback([map] { run_map(*map); });
 }

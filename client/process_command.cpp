@@ -17,6 +17,7 @@
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
+#include "core/products/corrected_gsf.h"
 #include "core/products/map_products.h"
 
 namespace bathyslam::cli {
@@ -35,11 +36,13 @@ struct ProcessOptions {
 
 // GSF input: each file copied with the corrected navigation in its ping headers
 // (OUT/<name>.corrected.gsf); a bundle: its pings written as OUT/corrected.gsf.
-void export_gsf(const ProcessOptions& o, const Survey& survey, const std::vector<NavSample>& corrected) {
+// The bundle's file is the one the service stores for a job.
+void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineResult& result,
+                const std::vector<NavSample>& corrected) {
   const std::filesystem::path out(o.out);
   if (!gsf::is_gsf_path(o.survey.inputs.front())) {
-    const std::uint64_t pings = gsf::write_survey(survey, corrected, out / "corrected.gsf");
-    std::printf("corrected.gsf: %llu pings with the corrected navigation\n", static_cast<unsigned long long>(pings));
+    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile);
+    std::printf("%s: %llu pings with the corrected navigation\n", kCorrectedGsfFile, static_cast<unsigned long long>(pings));
     return;
   }
   for (const std::filesystem::path input : o.survey.inputs) {
@@ -85,7 +88,7 @@ void run_process(const ProcessOptions& o) {
   const std::string map_files = write_map_products(result, survey.metadata, fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
-  if (o.export_gsf) export_gsf(o, survey, corrected);
+  if (o.export_gsf) export_gsf(o, survey, result, corrected);
   if (o.export_soundings) {
     const std::uint64_t n =
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");

@@ -11,7 +11,7 @@ LoadedSurvey load_survey(const SurveyInput& input) {
   if (input.paths.empty()) throw std::runtime_error("no survey given");
   const bool all_gsf = std::all_of(input.paths.begin(), input.paths.end(), gsf::is_gsf_path);
   if (all_gsf) {
-    gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav});
+    gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
     return {std::move(read.survey), std::move(read.files)};
   }
   if (input.paths.size() > 1) {

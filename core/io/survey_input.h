@@ -15,6 +15,7 @@ struct SurveyInput {
   std::vector<std::filesystem::path> paths;
   std::string crs;  // GSF only: the projected CRS; empty: the data's UTM zone
   std::optional<std::filesystem::path> reference_nav;  // GSF only
+  bool keep_soundings = true;  // GSF only; false: a survey to summarize (gsf::ReadOptions)
 };
 
 struct LoadedSurvey {

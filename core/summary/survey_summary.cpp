@@ -46,7 +46,8 @@ SurveySummary summarize(const Survey& survey) {
   s.crs = survey.metadata.crs;
   s.nav_samples = survey.nav.size();
   s.pings = survey.pings.size();
-  s.soundings = survey.beams.size();
+  // Counted from the pings, so that a survey read without its soundings (inspect) counts them too.
+  for (const Ping& ping : survey.pings) s.soundings += ping.beam_count;
   if (!survey.nav.empty()) {
     const NavSample& first = survey.nav.front();
     s.time_begin = first.time;

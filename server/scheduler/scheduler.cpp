@@ -9,6 +9,7 @@
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
 #include "core/pipeline/report.h"
+#include "core/products/corrected_gsf.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
 #include "server/scheduler/retry.h"
@@ -100,6 +101,16 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
   return report;
 }
 
+// The survey's pings with the corrected navigation as GSF in `dir`, when the survey has pings.
+// It stays a file (it can be as large as the upload) until stored chunk by chunk.
+std::optional<std::filesystem::path> corrected_gsf(const Survey& survey, const PipelineResult& result,
+                                                   const std::filesystem::path& dir) {
+  if (survey.pings.empty()) return std::nullopt;
+  const std::filesystem::path path = dir / kCorrectedGsfFile;
+  write_corrected_gsf(survey, result, path);
+  return path;
+}
+
 }  // namespace
 
 Scheduler::Scheduler(storage::SurveyStore& surveys, storage::JobQueue& jobs, storage::ResultStore& results,
@@ -165,10 +176,11 @@ void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds
 // What each stage produced, in the order of the pipeline. Everything an earlier try stored is
 // discarded first, so that the whole sequence can run again after a transient failure.
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
+                      const std::optional<std::filesystem::path>& corrected_gsf,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
   storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
-  constexpr int kStores = 5;
+  constexpr int kStores = 6;
   int stored = 0;
   auto step = [&](const char* what, const std::function<void()>& save) {
     if (cancel) throw Cancelled();
@@ -185,6 +197,9 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
   step("tiles", [&] {
     for (const auto& [key, bytes] : map.tiles) results.put_tile(id, key, bytes);
     if (map.grid.levels > 0) results.save_map_grid(id, map.grid);
+  });
+  step("corrected GSF", [&] {
+    if (corrected_gsf) results.put_file(id, kCorrectedGsfFile, *corrected_gsf);
   });
   step("report", [&] {
     storage::Report report = report_with_plots(result, options_.scratch);
@@ -246,8 +261,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
 
     event("map", 0, "fusing and tiling");
     const MapProducts map = make_map_products(result, bundle.survey->metadata, fuse, options_.scratch);
+    event("map", 0.5, "writing the corrected GSF");
+    const ScratchDir gsf_dir(options_.scratch, "gsf");
+    const auto gsf = corrected_gsf(*bundle.survey, result, gsf_dir.path());
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
-      store(job, result, map, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
+      store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);
     if (retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); }))

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <functional>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -47,6 +48,7 @@ class Scheduler {
   void work(const std::string& worker);
   void run(const storage::ClaimedJob& job);
   void store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
+             const std::optional<std::filesystem::path>& corrected_gsf,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
   void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error);

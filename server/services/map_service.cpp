@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "core/io/crs.h"
+#include "core/products/corrected_gsf.h"
 
 namespace bathyslam::server {
 namespace {
@@ -44,6 +45,22 @@ void stream(grpc::ServerContext* call, const storage::Bytes& data, grpc::ServerW
   }
 }
 
+// A file stored in chunks, sent as it is read: memory is one chunk whatever the file's size.
+void stream_file(grpc::ServerContext* call, ServiceContext& context, std::int64_t job_id, const std::string& name,
+                 std::int64_t size, grpc::ServerWriter<v1::DataChunk>* writer) {
+  std::int64_t offset = 0;
+  bool open = true;
+  context.results.read_file(job_id, name, [&](const storage::Bytes& data) {
+    if (!open || call->IsCancelled()) return;
+    v1::DataChunk chunk;
+    chunk.set_offset(offset);
+    chunk.set_total_bytes(size);
+    chunk.set_data(data.data(), data.size());
+    open = writer->Write(chunk);
+    offset += static_cast<std::int64_t>(data.size());
+  });
+}
+
 void set_pose(const Eigen::Isometry3d& pose, v1::Pose* out) {
   const Eigen::Quaterniond q(pose.rotation());
   out->set_easting(pose.translation().x());
@@ -63,6 +80,7 @@ grpc::Status MapService::GetMapInfo(grpc::ServerContext* call, const v1::GetMapI
     const storage::JobRecord job = owned_job(context_, tenant, request->job_id());
     const storage::SurveyRecord survey = owned_survey(context_, tenant, job.survey_id);
     reply->set_job_id(job.id);
+    reply->set_has_gsf(context_.results.file_size(job.id, kCorrectedGsfFile).has_value());
     // The survey's CRS is checked at creation or finalization to be "EPSG:<code>".
     std::string crs = survey.crs;
     if (crs.empty())
@@ -118,6 +136,12 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
                                 grpc::ServerWriter<v1::DataChunk>* writer) {
   return handle("GetMap", call, [&] {
     const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    if (request->format() == v1::GSF) {
+      const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
+      if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
+      stream_file(call, context_, job.id, kCorrectedGsfFile, *size, writer);
+      return;
+    }
     const std::string format = request->format() == v1::BAG ? "bag" : "cog";
     auto data = context_.results.tile(job.id, {format, 0, 0, 0});
     if (!data) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + format + " map");

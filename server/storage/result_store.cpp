@@ -5,6 +5,7 @@
 #include <array>
 #include <bit>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 #include "core/candidates/candidates.h"
@@ -280,6 +281,55 @@ std::vector<TileKey> ResultStore::tiles(std::int64_t job_id) {
   return keys;
 }
 
+ResultStore::ResultStore(ConnectionPool& pool, std::size_t chunk_bytes) : pool_(pool), chunk_bytes_(chunk_bytes) {
+  if (chunk_bytes_ == 0) throw std::invalid_argument("result store: chunk size must be positive");
+}
+
+void ResultStore::put_file(std::int64_t job_id, const std::string& name, const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path.string() + ": cannot read");
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
+  connection->exec("DELETE FROM job_files WHERE job_id = $1 AND name = $2", {job_id, name});
+  // The row first (the chunks refer to it), its size and count once every chunk is in.
+  connection->exec("INSERT INTO job_files (job_id, name, size_bytes, chunk_count) VALUES ($1, $2, 0, 0)", {job_id, name});
+  std::int64_t size = 0, chunks = 0;
+  Bytes chunk(chunk_bytes_);
+  while (in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+    const Bytes data(chunk.begin(), chunk.begin() + in.gcount());
+    connection->exec("INSERT INTO job_file_chunks (job_id, name, seq, data) VALUES ($1, $2, $3, $4)",
+                     {job_id, name, chunks++, data});
+    size += static_cast<std::int64_t>(data.size());
+  }
+  if (in.bad()) throw std::runtime_error(path.string() + ": cannot read");
+  connection->exec("UPDATE job_files SET size_bytes = $3, chunk_count = $4 WHERE job_id = $1 AND name = $2",
+                   {job_id, name, size, chunks});
+  transaction.commit();
+}
+
+std::optional<std::int64_t> ResultStore::file_size(std::int64_t job_id, const std::string& name) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec("SELECT size_bytes FROM job_files WHERE job_id = $1 AND name = $2", {job_id, name});
+  if (row.rows() == 0) return std::nullopt;
+  return row.int64(0, 0);
+}
+
+bool ResultStore::read_file(std::int64_t job_id, const std::string& name, const std::function<void(const Bytes&)>& sink) {
+  auto connection = pool_.acquire();
+  Result head = connection->exec("SELECT chunk_count FROM job_files WHERE job_id = $1 AND name = $2", {job_id, name});
+  if (head.rows() == 0) return false;
+  const std::int64_t chunks = head.int64(0, 0);
+  for (std::int64_t seq = 0; seq < chunks; ++seq) {
+    Result chunk = connection->exec("SELECT data FROM job_file_chunks WHERE job_id = $1 AND name = $2 AND seq = $3",
+                                    {job_id, name, seq});
+    if (chunk.rows() == 0)
+      throw std::runtime_error("job " + std::to_string(job_id) + " file '" + name + "': chunk " + std::to_string(seq) + " is missing");
+    sink(chunk.bytes(0, 0));
+  }
+  return true;
+}
+
 void ResultStore::save_map_grid(std::int64_t job_id, const MapGrid& g) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
@@ -313,7 +363,7 @@ void ResultStore::save_origin(std::int64_t job_id, const LocalOrigin& origin) {
 }
 
 ResultStore ResultStore::fenced(const Lease& lease) const {
-  ResultStore store(pool_);
+  ResultStore store(pool_, chunk_bytes_);
   store.fence_ = lease;
   return store;
 }
@@ -338,8 +388,8 @@ void ResultStore::discard(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   check_fence(*connection, job_id);
-  // report_plots go with their report (ON DELETE CASCADE).
-  for (const char* table : {"reports", "maps", "tiles", "optimized_poses", "constraints", "submaps"})
+  // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
+  for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
     connection->exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
   connection->exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
   transaction.commit();

@@ -1,7 +1,9 @@
 #pragma once
-// What a job produces, stored under the job: submaps, constraints, optimized poses, map tiles
-// and the quality report. Poses are stored as quaternion (w, x, y, z) + translation.
+// What a job produces, stored under the job: submaps, constraints, optimized poses, map tiles,
+// files too large for one row (in chunks) and the quality report. Poses are stored as quaternion (w, x, y, z) + translation.
 #include <cstdint>
+#include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -47,7 +49,8 @@ struct Report {
 
 class ResultStore {
  public:
-  explicit ResultStore(ConnectionPool& pool) : pool_(pool) {}
+  // Files are stored in chunks of `chunk_bytes` (1 MiB, as uploads are).
+  explicit ResultStore(ConnectionPool& pool, std::size_t chunk_bytes = 1 << 20);
 
   // The same store for a worker holding `lease`: every write below (the lease's job only) commits
   // only while the lease is held, else throws LeaseLost and writes nothing. A worker whose lease
@@ -73,6 +76,14 @@ class ResultStore {
   std::optional<Bytes> tile(std::int64_t job_id, const TileKey& key);
   std::vector<TileKey> tiles(std::int64_t job_id);  // every stored tile, without its bytes
 
+  // A file product (plain name: letters, digits, '.', '_', '-'), read from `path` chunk by
+  // chunk and stored in one transaction; replaces a file of that name. Memory: one chunk.
+  void put_file(std::int64_t job_id, const std::string& name, const std::filesystem::path& path);
+  std::optional<std::int64_t> file_size(std::int64_t job_id, const std::string& name);  // nullopt: none
+  // Hands the file's chunks to `sink` in order, one query each (memory: one chunk); false when
+  // there is no such file. Throws std::runtime_error when a chunk is missing.
+  bool read_file(std::int64_t job_id, const std::string& name, const std::function<void(const Bytes&)>& sink);
+
   void save_map_grid(std::int64_t job_id, const MapGrid& grid);
   std::optional<MapGrid> map_grid(std::int64_t job_id);
 
@@ -92,6 +103,7 @@ class ResultStore {
   void check_fence(Connection& connection, std::int64_t job_id) const;
 
   ConnectionPool& pool_;
+  std::size_t chunk_bytes_;
   std::optional<Lease> fence_;
 };
 

@@ -1,5 +1,9 @@
 // Job results round-trip, and a survey's deletion takes everything under it.
+#include <filesystem>
+#include <fstream>
 #include <random>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -190,6 +194,42 @@ TEST(ResultStore, PosesTilesAndReportsRoundTrip) {
   EXPECT_EQ(back->report, report.report);
   EXPECT_EQ(back->plots, report.plots);
   EXPECT_EQ(f.results.load_report(f.job + 1), std::nullopt);
+}
+
+// Files are stored and read back in chunks (three here: 7, 7 and 5 bytes), and replaced by name.
+TEST(ResultStore, FilesRoundTripInChunks) {
+  testing::FreshDatabase db;
+  ConnectionPool pool{db.conninfo(), 2};
+  SurveyStore surveys{pool};
+  JobQueue jobs{pool};
+  ResultStore results{pool, 7};
+  const std::int64_t job = jobs.enqueue({surveys.create_survey(surveys.create_tenant("acme"), "lake", {{"nav.csv", {1}}}), "gicp"});
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / ("job_file_" + std::to_string(::getpid()));
+  auto write = [&](const std::string& text) { std::ofstream(path, std::ios::binary) << text; };
+  auto read = [&](const std::string& name, std::vector<std::size_t>* sizes = nullptr) {
+    std::string text;
+    const bool found = results.read_file(job, name, [&](const Bytes& chunk) {
+      text.append(chunk.begin(), chunk.end());
+      if (sizes) sizes->push_back(chunk.size());
+    });
+    return found ? std::optional<std::string>(text) : std::nullopt;
+  };
+  write("GSF-v03.11 and more");
+  results.put_file(job, "corrected.gsf", path);
+  EXPECT_EQ(results.file_size(job, "corrected.gsf"), 19);
+  std::vector<std::size_t> sizes;
+  EXPECT_EQ(read("corrected.gsf", &sizes), "GSF-v03.11 and more");
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{7, 7, 5}));
+  write("short");
+  results.put_file(job, "corrected.gsf", path);  // replaced
+  EXPECT_EQ(read("corrected.gsf"), "short");
+  EXPECT_EQ(results.file_size(job, "other.gsf"), std::nullopt);
+  EXPECT_EQ(read("other.gsf"), std::nullopt);
+  EXPECT_THROW(results.put_file(job, "../escape", path), DatabaseError);  // plain names only
+  results.discard(job);
+  EXPECT_EQ(results.file_size(job, "corrected.gsf"), std::nullopt);
+  EXPECT_EQ(db.scalar("SELECT count(*) FROM job_file_chunks"), 0);
+  std::filesystem::remove(path);
 }
 
 TEST(ResultStore, AnAttemptStoppedWhileStoringLeavesNothingTheNextOneCollidesWith) {

@@ -78,6 +78,21 @@ gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the sur
   fail "map.bag and map.tif differ in size"
 [ -f "$work/report/map_difference.png" ] || fail "no map difference plot"
 
+# The survey's pings with the corrected navigation as GSF: every ping, moved off dead reckoning
+# (the DR survey as GSF differs), and the very file `process --export-gsf` writes for the same
+# bundle and configuration.
+"$BATHYSLAM" map "$job" --format gsf --out "$work/corrected.gsf" > /dev/null || fail "map --format gsf"
+"$BATHYSLAM" inspect "$work/corrected.gsf" > "$work/corrected.txt" || fail "inspect: $(cat "$work/corrected.txt")"
+pings=$(awk '/^counts/ {print $2}' "$work/corrected.txt")
+[ "$pings" = "$(awk '/^counts/ {print $2}' <("$BATHYSLAM" inspect "$SMALL_BUNDLE"))" ] || fail "corrected.gsf: $pings pings"
+"$BATHYSLAM" simulate --scenario small --seed 1 --format gsf --out "$work/drgsf" > /dev/null
+extent() { grep -E "^(  latitude|  longitude|extent) " "$1"; }
+"$BATHYSLAM" inspect "$work/drgsf/survey.gsf" > "$work/dr.txt"
+[ "$(extent "$work/dr.txt" | wc -l)" = 3 ] && [ "$(extent "$work/dr.txt")" != "$(extent "$work/corrected.txt")" ] ||
+  fail "corrected.gsf has the dead-reckoning positions: $(extent "$work/corrected.txt")"
+"$BATHYSLAM" process "$SMALL_BUNDLE" --config gicp --export-gsf --out "$work/process" > /dev/null 2>&1 || fail "process"
+cmp "$work/corrected.gsf" "$work/process/corrected.gsf" || fail "the job's corrected.gsf differs from process's"
+
 # GSF: a real file uploads and finalizes (EX1811 is 6.1 km x 6.4 km of deep water, mapped at the
 # 64 m its soundings fill); a truncated one is refused naming its record and byte; a simulated
 # GSF survey with its reference navigation runs as a job. (A survey too large to map is refused
@@ -101,6 +116,9 @@ r = json.load(sys.stdin)
 assert r["trajectory_error_m"]["optimized"]["rmse"] > 0, r["trajectory_error_m"]' || fail "GSF job report"
 "$BATHYSLAM" map "$gsf_job" --format bag --out "$work/gsf.bag" > /dev/null || fail "map --format bag of the GSF job"
 gdalinfo "$work/gsf.bag" | grep -q "UTM zone 51N" || fail "the GSF job's BAG is not in the data's UTM zone"
+"$BATHYSLAM" map "$gsf_job" --format gsf --out "$work/gsf_job.gsf" > /dev/null || fail "map --format gsf of the GSF job"
+[ "$("$BATHYSLAM" inspect "$work/gsf_job.gsf" | awk '/^  pings/ {print $2}')" = \
+  "$("$BATHYSLAM" inspect "$work/simgsf/survey.gsf" | awk '/^  pings/ {print $2}')" ] || fail "the GSF job's GSF lost pings"
 
 # Tokens: another tenant sees none of this; a wrong token is refused.
 token=$("$BATHYSLAM_SERVER_BIN" token --db "$url" --tenant other)

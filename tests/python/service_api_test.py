@@ -267,6 +267,7 @@ class ServiceApiTest(unittest.TestCase):
         self.assertGreaterEqual(info.levels, 1)
         self.assertTrue(info.has_map)
         self.assertTrue(info.has_bag)
+        self.assertTrue(info.has_gsf)
         self.assertLess(info.min_easting, info.max_easting)
         tile = info.tiles[0]
         self.assertEqual(set(tile.formats), {map_pb2.GEOTIFF, map_pb2.VDB, map_pb2.PNG})
@@ -303,6 +304,8 @@ class ServiceApiTest(unittest.TestCase):
         self.assertAlmostEqual(whole.GetGeoTransform()[0], info.min_easting)
         bag = fetch(lambda **kw: self.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.BAG), **kw))
         self.assertEqual(bag[:8], b"\x89HDF\r\n\x1a\n")  # BAG is HDF5
+        gsf = fetch(lambda **kw: self.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.GSF), **kw))
+        self.assertEqual(gsf[4:18], b"\x00\x00\x00\x01GSF-v03.11")  # the header record comes first
         self.assert_code(grpc.StatusCode.NOT_FOUND, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
                          map_pb2.GetTileRequest(job_id=job.id, level=99, col=0, row=0, format=map_pb2.GEOTIFF))
         self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetTile(r, **kw)),

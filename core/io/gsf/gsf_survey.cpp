@@ -115,7 +115,8 @@ std::string iso_time(double t) {
 // Appends one ping's navigation and usable soundings to `survey`.
 class SurveyBuilder {
  public:
-  SurveyBuilder(Survey& survey, std::string crs) : survey_(survey), crs_(std::move(crs)) {}
+  SurveyBuilder(Survey& survey, std::string crs, bool keep_soundings)
+      : survey_(survey), crs_(std::move(crs)), keep_soundings_(keep_soundings) {}
 
   void add(const Ping& p, const std::string& where) {
     if (!projection_) {
@@ -142,11 +143,12 @@ class SurveyBuilder {
     bathyslam::Ping ping{p.time, static_cast<std::uint32_t>(survey_.beams.size()), 0};
     for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) {
       if (!usable_beam(p, b)) continue;
+      ++ping.beam_count;
+      if (!keep_soundings_) continue;
       const Eigen::Vector3d level(along_of(p, b), p.across_m[b], p.depth_m[b] - p.depth_corrector_m);
       const Eigen::Vector3d v = level_to_vehicle * level;
       survey_.beams.push_back({static_cast<std::uint32_t>(b), static_cast<float>(v.x()), static_cast<float>(v.y()),
                                static_cast<float>(v.z())});
-      ++ping.beam_count;
     }
     if (ping.beam_count > 0) survey_.pings.push_back(ping);
   }
@@ -154,6 +156,7 @@ class SurveyBuilder {
  private:
   Survey& survey_;
   std::string crs_;
+  bool keep_soundings_;
   std::unique_ptr<GeographicProjection> projection_;
 };
 
@@ -262,7 +265,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   if (files.empty()) throw std::runtime_error("no GSF file given");
   SurveyRead out;
   out.survey.metadata.name = files.front().stem().string();
-  SurveyBuilder survey(out.survey, options.crs);
+  SurveyBuilder survey(out.survey, options.crs, options.keep_soundings);
   MetadataBuilder metadata;
   for (const std::filesystem::path& path : files) {
     FileSource source(path);
@@ -302,9 +305,12 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
   const double first_time = survey.pings.empty() ? 0.0 : survey.pings.front().time;
   writer.write(Comment{first_time, "bathyslam survey '" + survey.metadata.name + "', navigation in " +
                                        survey.metadata.crs + " written back as WGS 84"});
-  // Angles are quantised to the field's hundredths of a degree before the beams are expressed
-  // in the level frame, so that reading back (which rotates by the stored angles) puts every
-  // sounding exactly where it was, not off by range times the rounding.
+  // The ping header's fields are coarse (1e-7 deg of position, 0.01 deg, 1 cm of vehicle depth),
+  // the beam arrays fine (0.1 mm). Each beam is written relative to the ping as stored, its
+  // rounding included, so that reading back puts every sounding where it was to the arrays'
+  // resolution, not off by range times an angle's rounding or by a position's: the angles'
+  // rounding is taken out in the rotation into the level frame, the position's and the vehicle
+  // depth's in the offsets.
   auto centi = [](double deg) { return std::round(deg * 100.0) / 100.0; };
   for (const bathyslam::Ping& sp : survey.pings) {
     const std::optional<NavSample> at = interpolate_nav(nav, sp.time);
@@ -313,8 +319,8 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
     Ping p;
     p.time = sp.time;
     const auto ll = projection.inverse(at->easting, at->northing);
-    p.longitude_deg = ll.longitude_deg;
-    p.latitude_deg = ll.latitude_deg;
+    p.longitude_deg = std::round(ll.longitude_deg * 1e7) / 1e7;  // the field's resolution
+    p.latitude_deg = std::round(ll.latitude_deg * 1e7) / 1e7;
     p.heading_deg = heading_field(at->heading_deg) / 100.0;
     p.course_deg = p.heading_deg;
     p.pitch_deg = centi(at->pitch_deg);
@@ -330,11 +336,15 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
     p.beam_flags.assign(n, 1);  // beams the survey does not have are marked unusable
     const Eigen::Matrix3d vehicle_to_level = yaw(p.heading_deg).transpose() * yaw(at->heading_deg) *
                                              tilt(at->roll_deg, at->pitch_deg);
+    // From the stored position to the true one (north, east, down), in the level frame.
+    const auto stored = projection.forward(p.longitude_deg, p.latitude_deg);
+    const Eigen::Vector3d position_rounding =
+        yaw(p.heading_deg).transpose() * Eigen::Vector3d(at->northing - stored.northing, at->easting - stored.easting, 0);
     for (const Beam& b : beams) {
-      const Eigen::Vector3d level = vehicle_to_level * Eigen::Vector3d(b.along, b.across, b.down);
+      const Eigen::Vector3d level = vehicle_to_level * Eigen::Vector3d(b.along, b.across, b.down) + position_rounding;
       p.along_m[b.index] = level.x();
       p.across_m[b.index] = level.y();
-      p.depth_m[b.index] = level.z() + p.depth_corrector_m;
+      p.depth_m[b.index] = level.z() + at->depth_m;  // the sounding's depth, not the rounded corrector's
       p.beam_flags[b.index] = 0;
     }
     writer.write(p);

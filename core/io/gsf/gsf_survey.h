@@ -48,6 +48,9 @@ std::string to_text(const FileSummary& summary);
 struct ReadOptions {
   std::string crs;  // "EPSG:<code>"; empty: the WGS 84 UTM zone of the first ping
   std::optional<std::filesystem::path> reference_nav;  // a nav.csv-format file
+  // false: every ping keeps its sounding count but no sounding is kept (Survey::beams stays
+  // empty), so that a summary needs the memory of the navigation, not of the soundings.
+  bool keep_soundings = true;
 };
 
 struct SurveyRead {

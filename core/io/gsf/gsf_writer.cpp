@@ -18,9 +18,11 @@ struct ArrayEncoding {
   std::int32_t multiplier;
 };
 
-constexpr ArrayEncoding kDepth{kDepthArray, "depth", 4, false, 1000};
-constexpr ArrayEncoding kAcross{kAcrossTrackArray, "across-track", 4, true, 1000};
-constexpr ArrayEncoding kAlong{kAlongTrackArray, "along-track", 4, true, 1000};
+// Tenths of a millimetre: finer than float32 keeps an across-track distance of a kilometre, so
+// the arrays add no loss of their own, and 4 bytes still reach 214 km (429 km of depth).
+constexpr ArrayEncoding kDepth{kDepthArray, "depth", 4, false, 10000};
+constexpr ArrayEncoding kAcross{kAcrossTrackArray, "across-track", 4, true, 10000};
+constexpr ArrayEncoding kAlong{kAlongTrackArray, "along-track", 4, true, 10000};
 constexpr ArrayEncoding kTravelTime{kTravelTimeArray, "travel time", 4, false, 1000000};
 constexpr ArrayEncoding kBeamAngle{kBeamAngleArray, "beam angle", 2, true, 100};
 

@@ -5,7 +5,7 @@
 // survey of any size needs the memory of one ping.
 //
 // Fixed scale factors, written with the first ping (section 4.3.4.2): depth, across- and
-// along-track 4-byte integers of millimetres; travel time 4-byte microseconds; beam angle
+// along-track 4-byte integers of tenths of a millimetre; travel time 4-byte microseconds; beam angle
 // 2-byte hundredths of a degree. The file appears under its name only once closed.
 #include <cstdint>
 #include <filesystem>
