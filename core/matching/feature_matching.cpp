@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_types.h>
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 namespace {
@@ -37,22 +36,13 @@ Side side_of(const std::vector<Keypoint>& keypoints) {
 std::vector<BestMatch> one_way(const Side& queries, const Side& indexed, const MatchConfig& config) {
   std::vector<BestMatch> best(queries.keypoints.size());
   if (indexed.keypoints.empty()) return best;
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXY>>();
-  for (const Eigen::Vector3d& p : indexed.positions) {
-    pcl::PointXY q;
-    q.x = static_cast<float>(p.x());
-    q.y = static_cast<float>(p.y());
-    cloud->push_back(q);
-  }
-  pcl::KdTreeFLANN<pcl::PointXY> tree;
-  tree.setInputCloud(cloud);
-  std::vector<int> near;
+  // pcl::KdTreeFLANN<pcl::PointXY>'s tree and radius search, without its per-query OpenMP region.
+  const FlannIndex tree = planar_index(indexed.positions);
+  pcl::Indices near;
   std::vector<float> sq_distances;
   for (std::size_t i = 0; i < queries.keypoints.size(); ++i) {
-    pcl::PointXY q;
-    q.x = static_cast<float>(queries.positions[i].x());
-    q.y = static_cast<float>(queries.positions[i].y());
-    tree.radiusSearch(q, config.max_distance_m, near, sq_distances);
+    const float q[2] = {static_cast<float>(queries.positions[i].x()), static_cast<float>(queries.positions[i].y())};
+    tree.within(q, config.max_distance_m, near, sq_distances);
     double second = std::numeric_limits<double>::infinity();
     for (int j : near) {
       const double mse = descriptor_mse(queries.keypoints[i].descriptor, indexed.keypoints[j].descriptor);

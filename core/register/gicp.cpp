@@ -2,7 +2,7 @@
 
 #include <pcl/registration/gicp.h>
 
-#include "core/register/flann_tree.h"
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 

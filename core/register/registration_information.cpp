@@ -2,7 +2,7 @@
 
 #include <Eigen/Dense>
 
-#include "core/register/flann_tree.h"
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 namespace {

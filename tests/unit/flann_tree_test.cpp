@@ -1,4 +1,4 @@
-#include "core/register/flann_tree.h"
+#include "core/search/flann_tree.h"
 
 #include <cmath>
 #include <random>
@@ -40,6 +40,35 @@ TEST(FlannTree, FindsPclsNeighboursAndDistancesExactly) {
       EXPECT_EQ(got, expected) << "k " << k << ", query " << q;
       EXPECT_EQ(got_sq, expected_sq) << "k " << k << ", query " << q;
     }
+  }
+}
+
+TEST(FlannTree, PlanarRadiusSearchIsPclsExactly) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> along(-60.0, 60.0);
+  std::vector<Eigen::Vector3d> keypoints;
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXY>>();
+  for (int i = 0; i < 1500; ++i) {
+    // Rounded to a 0.5 m grid, as keypoints are: many points at equal distances.
+    keypoints.emplace_back(0.5 * std::round(2 * along(rng)), 0.5 * std::round(2 * along(rng)), 20.0);
+    pcl::PointXY p;
+    p.x = static_cast<float>(keypoints.back().x());
+    p.y = static_cast<float>(keypoints.back().y());
+    cloud->push_back(p);
+  }
+  pcl::KdTreeFLANN<pcl::PointXY> pcl_tree;
+  pcl_tree.setInputCloud(cloud);
+  const FlannIndex tree = planar_index(keypoints);
+  for (int q = 0; q < 200; ++q) {
+    pcl::PointXY query;
+    query.x = static_cast<float>(along(rng));
+    query.y = static_cast<float>(along(rng));
+    const float xy[2] = {query.x, query.y};
+    pcl::Indices expected, got;
+    std::vector<float> expected_sq, got_sq;
+    ASSERT_EQ(tree.within(xy, 30.0, got, got_sq), pcl_tree.radiusSearch(query, 30.0, expected, expected_sq));
+    EXPECT_EQ(got, expected) << "query " << q;
+    EXPECT_EQ(got_sq, expected_sq) << "query " << q;
   }
 }
 
