@@ -136,11 +136,20 @@ std::vector<Keypoint> detect_keypoints(const TerrainGrid& grid, const KeypointCo
   return keypoints;
 }
 
+CentredDescriptor centred(const Eigen::VectorXf& descriptor) {
+  CentredDescriptor c;
+  c.values = descriptor.cast<double>().array() - descriptor.cast<double>().mean();
+  c.sum_sq = (c.values * c.values).sum();
+  return c;
+}
+
+double descriptor_ncc(const CentredDescriptor& a, const CentredDescriptor& b) {
+  const double denominator = std::sqrt(a.sum_sq * b.sum_sq);
+  return denominator > 0 ? (a.values * b.values).sum() / denominator : 0.0;
+}
+
 double descriptor_ncc(const Eigen::VectorXf& a, const Eigen::VectorXf& b) {
-  const Eigen::ArrayXd x = a.cast<double>().array() - a.cast<double>().mean();
-  const Eigen::ArrayXd y = b.cast<double>().array() - b.cast<double>().mean();
-  const double denominator = std::sqrt((x * x).sum() * (y * y).sum());
-  return denominator > 0 ? (x * y).sum() / denominator : 0.0;
+  return descriptor_ncc(centred(a), centred(b));
 }
 
 double descriptor_mse(const Eigen::VectorXf& a, const Eigen::VectorXf& b) {

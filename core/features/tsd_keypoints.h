@@ -49,6 +49,16 @@ std::vector<Keypoint> detect_keypoints(const TerrainGrid& grid, const KeypointCo
 
 // Normalised cross-correlation of two descriptors (equation 10), in [-1, 1].
 double descriptor_ncc(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
+
+// A descriptor as descriptor_ncc correlates it: its samples in double less their mean, and their
+// sum of squares. Matching correlates a keypoint with every neighbour inside the gate, so it
+// centres each descriptor once instead of once per neighbour; the result is the same number.
+struct CentredDescriptor {
+  Eigen::ArrayXd values;
+  double sum_sq = 0;
+};
+CentredDescriptor centred(const Eigen::VectorXf& descriptor);
+double descriptor_ncc(const CentredDescriptor& a, const CentredDescriptor& b);
 // Mean squared difference of two descriptors, m^2: the match score of Algorithm 2.
 double descriptor_mse(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
 

@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_types.h>
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 namespace {
@@ -14,33 +13,43 @@ struct BestMatch {
   double mse = std::numeric_limits<double>::infinity();
 };
 
-// For each query keypoint (positions already in the indexed set's frame), its best match among
-// the indexed keypoints within the gate, if it passes correlation and the ratio test.
-std::vector<BestMatch> one_way(const std::vector<Keypoint>& queries, const std::vector<Eigen::Vector3d>& query_positions,
-                               const std::vector<Keypoint>& indexed, const std::vector<Eigen::Vector3d>& indexed_positions,
-                               const MatchConfig& config) {
-  std::vector<BestMatch> best(queries.size());
-  if (indexed.empty()) return best;
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXY>>();
-  for (const Eigen::Vector3d& p : indexed_positions) {
-    pcl::PointXY q;
-    q.x = static_cast<float>(p.x());
-    q.y = static_cast<float>(p.y());
-    cloud->push_back(q);
+// One side of the pair: where its keypoints sit in the target frame and their descriptors.
+struct Side {
+  const std::vector<Keypoint>& keypoints;
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<CentredDescriptor> descriptors;  // centred once for both directions
+};
+
+Side side_of(const std::vector<Keypoint>& keypoints) {
+  Side side{keypoints, {}, {}};
+  side.positions.reserve(keypoints.size());
+  side.descriptors.reserve(keypoints.size());
+  for (const Keypoint& k : keypoints) {
+    side.positions.push_back(k.position);
+    side.descriptors.push_back(centred(k.descriptor));
   }
-  pcl::KdTreeFLANN<pcl::PointXY> tree;
-  tree.setInputCloud(cloud);
-  std::vector<int> near;
+  return side;
+}
+
+// For each query keypoint, its best match among the indexed keypoints within the gate, if it
+// passes correlation and the ratio test.
+std::vector<BestMatch> one_way(const Side& queries, const Side& indexed, const MatchConfig& config) {
+  std::vector<BestMatch> best(queries.keypoints.size());
+  if (indexed.keypoints.empty()) return best;
+  // pcl::KdTreeFLANN<pcl::PointXY>'s tree and radius search, without its per-query OpenMP region.
+  const FlannIndex tree = planar_index(indexed.positions);
+  pcl::Indices near;
   std::vector<float> sq_distances;
-  for (std::size_t i = 0; i < queries.size(); ++i) {
-    pcl::PointXY q;
-    q.x = static_cast<float>(query_positions[i].x());
-    q.y = static_cast<float>(query_positions[i].y());
-    tree.radiusSearch(q, config.max_distance_m, near, sq_distances);
+  for (std::size_t i = 0; i < queries.keypoints.size(); ++i) {
+    const float q[2] = {static_cast<float>(queries.positions[i].x()), static_cast<float>(queries.positions[i].y())};
+    tree.within(q, config.max_distance_m, near, sq_distances);
     double second = std::numeric_limits<double>::infinity();
     for (int j : near) {
-      if (descriptor_ncc(queries[i].descriptor, indexed[j].descriptor) < config.min_ncc) continue;
-      const double mse = descriptor_mse(queries[i].descriptor, indexed[j].descriptor);
+      const double mse = descriptor_mse(queries.keypoints[i].descriptor, indexed.keypoints[j].descriptor);
+      // Neither the best nor the second best can change (best <= second), so the costlier
+      // correlation test need not run.
+      if (mse >= second) continue;
+      if (descriptor_ncc(queries.descriptors[i], indexed.descriptors[j]) < config.min_ncc) continue;
       if (mse < best[i].mse) {
         second = best[i].mse;
         best[i] = {j, mse};
@@ -58,11 +67,11 @@ std::vector<BestMatch> one_way(const std::vector<Keypoint>& queries, const std::
 
 std::vector<FeatureMatch> match_features(const std::vector<Keypoint>& source, const std::vector<Keypoint>& target,
                                          const Eigen::Isometry3d& source_to_target, const MatchConfig& config) {
-  std::vector<Eigen::Vector3d> source_in_target, target_in_target;
-  for (const Keypoint& k : source) source_in_target.push_back(source_to_target * k.position);
-  for (const Keypoint& k : target) target_in_target.push_back(k.position);
-  const std::vector<BestMatch> forward = one_way(source, source_in_target, target, target_in_target, config);
-  const std::vector<BestMatch> backward = one_way(target, target_in_target, source, source_in_target, config);
+  Side source_side = side_of(source);
+  for (Eigen::Vector3d& p : source_side.positions) p = source_to_target * p;
+  const Side target_side = side_of(target);
+  const std::vector<BestMatch> forward = one_way(source_side, target_side, config);
+  const std::vector<BestMatch> backward = one_way(target_side, source_side, config);
 
   std::vector<FeatureMatch> matches;
   for (std::size_t i = 0; i < forward.size(); ++i) {

@@ -19,15 +19,24 @@ void parallel_for(std::size_t n, int threads, const std::atomic<bool>* cancel, B
   std::exception_ptr failure;
   std::once_flag first;
   std::atomic<bool> failed = false;
-#pragma omp parallel for schedule(dynamic, chunk) num_threads(threads < 1 ? 1 : threads)
-  for (std::size_t i = 0; i < n; ++i) {
-    if (failed.load() || (cancel != nullptr && cancel->load())) continue;
+  auto iteration = [&](std::size_t i) {
+    if (failed.load() || (cancel != nullptr && cancel->load())) return;
     try {
       body(i);
     } catch (...) {
       std::call_once(first, [&] { failure = std::current_exception(); });
       failed = true;
     }
+  };
+  if (threads <= 1) {
+    // No OpenMP region for one thread: FLANN opens one of its own for every query PCL's
+    // KD-trees make, and nested inside ours each of those builds and frees a team (a third of
+    // a registration's CPU on `lake`, most of it futex calls); at the top level libgomp reuses
+    // one team instead. Same iterations in the same order as the one-thread region.
+    for (std::size_t i = 0; i < n; ++i) iteration(i);
+  } else {
+#pragma omp parallel for schedule(dynamic, chunk) num_threads(threads)
+    for (std::size_t i = 0; i < n; ++i) iteration(i);
   }
   if (failure) std::rethrow_exception(failure);
   throw_if_cancelled(cancel);

@@ -1,7 +1,8 @@
 #include "core/register/gicp.h"
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/registration/gicp.h>
+
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 
@@ -37,7 +38,7 @@ Eigen::Isometry3d keep_dr_roll_pitch(const Eigen::Isometry3d& registered, const 
 
 RegistrationQuality overlap_quality(const Cloud& target, const Cloud& source,
                                     const Eigen::Isometry3d& source_to_target, double max_distance_m) {
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  FlannTree tree;
   tree.setInputCloud(target.makeShared());
   const Eigen::Isometry3f t = source_to_target.cast<float>();
   RegistrationQuality q;
@@ -80,6 +81,9 @@ struct GicpPass {
 GicpPass gicp_pass(const Cloud::ConstPtr& target, const Cloud::ConstPtr& source, const Eigen::Matrix4f& guess,
                    double max_correspondence_m, double convergence, const GicpConfig& config) {
   pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> gicp;
+  // PCL's own trees, searched without FLANN's per-query parallel region (flann_tree.h).
+  gicp.setSearchMethodTarget(std::make_shared<FlannTree>());
+  gicp.setSearchMethodSource(std::make_shared<FlannTree>());
   gicp.setInputTarget(target);
   gicp.setInputSource(source);
   gicp.setMaxCorrespondenceDistance(max_correspondence_m);

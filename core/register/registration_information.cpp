@@ -1,14 +1,15 @@
 #include "core/register/registration_information.h"
 
 #include <Eigen/Dense>
-#include <pcl/kdtree/kdtree_flann.h>
+
+#include "core/search/flann_tree.h"
 
 namespace bathyslam {
 namespace {
 
 constexpr double kPlaneEpsilon = 1e-3;  // GICP's (PCL's gicp_epsilon, Segal et al.)
 
-using Tree = pcl::KdTreeFLANN<pcl::PointXYZ>;
+using Tree = FlannTree;  // pcl::KdTreeFLANN's tree and neighbours, one query at a time
 
 // Each point's neighbourhood covariance with its eigenvalues replaced by 1, 1, ε: a surface
 // element, certain along its normal, uncertain across it, whatever the point spacing.
