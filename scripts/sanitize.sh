@@ -5,9 +5,12 @@
 #
 # The programs that do not register point clouds: types, bundle and CSV, survey lines, fusion, and
 # the storage tests against PostgreSQL. Those that do (slam_test, features_test, pipeline_test)
-# stop at a heap-buffer-overflow ASan reports inside PCL's PointCloud destructor: PCL's own
-# library and our ASan build disagree about the cloud's aligned allocation. Not ours to fix by
-# hand; left out until it is understood.
+# used to stop at a heap-buffer-overflow inside PCL's PointCloud destructor: under ASan Eigen
+# stopped trusting malloc's alignment and freed PCL's clouds with its handmade allocator.
+# CMakeLists.txt now pins EIGEN_MALLOC_ALREADY_ALIGNED=1 in this build, and slam_test passes
+# clean (53 tests, 80 s on the 2-core machine: `--target slam_test`, then run it with the
+# options below). They stay out of CI's run for its time limit: compiling them with ASan costs
+# minutes that the 45 asked for do not have room for.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
