@@ -1,6 +1,5 @@
 // bathyslam submit / watch / jobs / report: SLAM jobs on the server.
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -12,6 +11,7 @@
 #include "bathyslam/v1/job.grpc.pb.h"
 #include "client/commands.h"
 #include "client/remote.h"
+#include "core/types/format.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -77,15 +77,7 @@ void run_watch(const JobOptions& o) {
   if (state != v1::SUCCEEDED) throw std::runtime_error("job " + std::to_string(o.job) + " did not succeed");
 }
 
-std::string when(double seconds) {
-  if (seconds <= 0) return "-";
-  const std::time_t t = static_cast<std::time_t>(seconds);
-  std::tm utc{};
-  gmtime_r(&t, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S", &utc);
-  return text;
-}
+std::string when(double seconds) { return seconds <= 0 ? "-" : format_utc(seconds, "%Y-%m-%d %H:%M:%S"); }
 
 void run_jobs(const JobOptions& o) {
   auto stub = v1::JobService::NewStub(o.remote.channel());

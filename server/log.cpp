@@ -2,20 +2,17 @@
 
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <mutex>
 #include <string>
+
+#include "core/types/format.h"
 
 namespace bathyslam::server {
 
 void log(const char* format, ...) {
   const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S", &utc);
+  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count();
+  const std::string stamp = format_utc(static_cast<double>(millis / 1000), "%Y-%m-%dT%H:%M:%S");
   char message[2048];
   va_list args;
   va_start(args, format);
@@ -23,7 +20,7 @@ void log(const char* format, ...) {
   va_end(args);
   static std::mutex mutex;  // whole lines, even from several workers
   std::lock_guard lock(mutex);
-  std::fprintf(stderr, "%s.%03dZ %s\n", stamp, static_cast<int>(millis), message);
+  std::fprintf(stderr, "%s.%03dZ %s\n", stamp.c_str(), static_cast<int>(millis % 1000), message);
 }
 
 }  // namespace bathyslam::server

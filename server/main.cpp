@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <csignal>
-#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -20,6 +19,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/grpcpp.h>
 
+#include "core/types/format.h"
 #include "server/database_health.h"
 #include "server/log.h"
 #include "server/scheduler/scheduler.h"
@@ -92,14 +92,7 @@ int revoke_token(const std::string& db, const TokenOptions& t) {
   return 1;
 }
 
-std::string utc(double seconds) {
-  const std::time_t time = static_cast<std::time_t>(seconds);
-  std::tm tm{};
-  gmtime_r(&time, &tm);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text;
-}
+std::string utc(double seconds) { return bathyslam::format_utc(seconds, "%Y-%m-%dT%H:%M:%SZ"); }
 
 int list_tokens(const std::string& db, const TokenOptions& t) {
   storage::ConnectionPool pool(db, 1);

@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "core/types/format.h"
 
 namespace bathyslam {
 
@@ -72,12 +73,10 @@ GridRaster GridFuser::raster() const {
   const double cells = static_cast<double>(col_hi - col_lo + 1) * static_cast<double>(row_hi - row_lo + 1);
   const bool over_limit = config_.max_cells > 0 && cells > static_cast<double>(config_.max_cells);
   if (over_limit || col_hi - col_lo >= std::numeric_limits<int>::max() || row_hi - row_lo >= std::numeric_limits<int>::max()) {
-    char text[256];
-    std::snprintf(text, sizeof text, "map: the soundings cover %.0f m × %.0f m: %.0f cells at %g m, over the limit of %llu",
-                  static_cast<double>(col_hi - col_lo + 1) * config_.resolution_m,
-                  static_cast<double>(row_hi - row_lo + 1) * config_.resolution_m, cells, config_.resolution_m,
-                  static_cast<unsigned long long>(config_.max_cells));
-    throw std::length_error(text);
+    throw std::length_error(format("map: the soundings cover %.0f m × %.0f m: %.0f cells at %g m, over the limit of %llu",
+                                   static_cast<double>(col_hi - col_lo + 1) * config_.resolution_m,
+                                   static_cast<double>(row_hi - row_lo + 1) * config_.resolution_m, cells,
+                                   config_.resolution_m, static_cast<unsigned long long>(config_.max_cells)));
   }
   geometry.left = col_lo;
   geometry.top = row_hi;

@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
+
+#include "core/types/format.h"
 
 namespace bathyslam {
 
@@ -28,12 +29,10 @@ MapExtent survey_map_extent(const Survey& survey, double resolution_m) {
 std::optional<Problem> map_extent_problem(const Survey& survey, double resolution_m, std::uint64_t max_cells) {
   const MapExtent extent = survey_map_extent(survey, resolution_m);
   if (extent.cells <= max_cells) return std::nullopt;
-  char text[256];
-  std::snprintf(text, sizeof text,
-                "the survey covers %.0f m × %.0f m: a map of %llu cells at %g m, over the limit of %llu",
-                extent.width_m, extent.height_m, static_cast<unsigned long long>(extent.cells), resolution_m,
-                static_cast<unsigned long long>(max_cells));
-  return Problem{Problem::Severity::kError, "nav.csv", 0, "easting, northing", text};
+  return Problem{Problem::Severity::kError, "nav.csv", 0, "easting, northing",
+                 format("the survey covers %.0f m × %.0f m: a map of %llu cells at %g m, over the limit of %llu",
+                        extent.width_m, extent.height_m, static_cast<unsigned long long>(extent.cells), resolution_m,
+                        static_cast<unsigned long long>(max_cells))};
 }
 
 }  // namespace bathyslam

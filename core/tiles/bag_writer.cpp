@@ -7,6 +7,7 @@
 #include <cpl_string.h>
 
 #include "core/tiles/gdal_raster.h"
+#include "core/types/format.h"
 
 namespace bathyslam {
 namespace {
@@ -37,18 +38,14 @@ void write_bag(const GridRaster& raster, std::string_view crs, const BagMetadata
   GdalDatasetPtr mem = memory_raster(raster.geometry, crs, bands, kBagNoData, what);
 
   // The variables of GDAL's BAG metadata template (ISO 19115): who, when, what, how.
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char date[16], datetime[32];
-  std::strftime(date, sizeof date, "%Y-%m-%d", &utc);
-  std::strftime(datetime, sizeof datetime, "%Y-%m-%dT%H:%M:%S", &utc);
+  const auto now = static_cast<double>(std::time(nullptr));
+  const std::string date = format_utc(now, "%Y-%m-%d"), datetime = format_utc(now, "%Y-%m-%dT%H:%M:%S");
   CPLStringList options;
   options.SetNameValue("VAR_ORGANISATION_NAME", metadata.organisation.c_str());
   options.SetNameValue("VAR_INDIVIDUAL_NAME", "bathyslam");
   options.SetNameValue("VAR_POSITION_NAME", "processing software");
-  options.SetNameValue("VAR_DATE", date);
-  options.SetNameValue("VAR_DATETIME", datetime);
+  options.SetNameValue("VAR_DATE", date.c_str());
+  options.SetNameValue("VAR_DATETIME", datetime.c_str());
   options.SetNameValue("VAR_ABSTRACT", metadata.abstract.c_str());
   options.SetNameValue("VAR_PROCESS_STEP_DESCRIPTION", metadata.process_step.c_str());
   options.SetNameValue("VAR_VERTICAL_UNCERT_CODE", "rawStdDev");

@@ -1,6 +1,8 @@
 #pragma once
-// printf-style formatting into a std::string, for the reasons registrations carry in words.
+// printf-style formatting into a std::string, for the reasons registrations carry in words, and
+// UTC times as text.
 #include <cstdio>
+#include <ctime>
 #include <string>
 
 namespace bathyslam {
@@ -13,6 +15,16 @@ std::string format(const char* pattern, Args... args) {
   std::snprintf(text.data(), text.size(), pattern, args...);
   text.pop_back();
   return text;
+}
+
+// `seconds` since the Unix epoch (whole seconds) as UTC text, by a strftime pattern
+// ("%Y-%m-%dT%H:%M:%SZ").
+inline std::string format_utc(double seconds, const char* pattern) {
+  const auto time = static_cast<std::time_t>(seconds);
+  std::tm utc{};
+  gmtime_r(&time, &utc);
+  char text[64];
+  return std::string(text, std::strftime(text, sizeof text, pattern, &utc));
 }
 
 }  // namespace bathyslam

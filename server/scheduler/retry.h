@@ -55,10 +55,6 @@ auto retry_transient(const std::string& what, const RetryPolicy& policy, const s
   }
 }
 
-}  // namespace bathyslam::server
-
-namespace bathyslam::server {
-
 // Logs the first of a run of failures of the same kind and the recovery after it, not every one
 // in between: a watcher polling every 200 ms through a 30 s outage would write 150 lines.
 class FailureStreak {

@@ -1,7 +1,5 @@
 #include "server/services/survey_service.h"
 
-#include <cstring>
-
 #include "core/fuse/fuse.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
@@ -101,10 +99,10 @@ void check_declaration(const v1::UploadFileRequest& message, const Limits& limit
 
 // Where the declared upload resumes: the committed bytes of the same declaration, or 0 for a new
 // (or changed) one. A first chunk anywhere else is refused before the declaration is stored.
-void check_first_offset(storage::SurveyStore& surveys, std::int64_t survey_id, const v1::UploadFileRequest& message) {
+void check_first_offset(storage::SurveyStore& surveys, std::int64_t survey_id, const v1::UploadFileRequest& message,
+                        const storage::Sha256& digest) {
   const auto existing = surveys.upload_state(survey_id, message.file_name());
-  const bool resumed = existing && existing->size_bytes == message.size_bytes() &&
-                       std::memcmp(existing->sha256.data(), message.sha256().data(), existing->sha256.size()) == 0;
+  const bool resumed = existing && existing->size_bytes == message.size_bytes() && existing->sha256 == digest;
   const std::int64_t committed = resumed ? existing->committed_bytes : 0;
   if (message.offset() != committed)
     throw Refusal(grpc::StatusCode::ABORTED, "offset: " + std::to_string(message.offset()) + " but " + std::to_string(committed) +
@@ -171,9 +169,9 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     const std::string& name = first.file_name();
     owned_survey(context_, tenant, survey_id);
     check_declaration(first, context_.limits);
-    check_first_offset(context_.surveys, survey_id, first);
     storage::Sha256 digest{};
     std::copy(first.sha256().begin(), first.sha256().end(), digest.begin());
+    check_first_offset(context_.surveys, survey_id, first, digest);
     try {
       storage::UploadState state = context_.surveys.begin_upload(survey_id, name, first.size_bytes(), digest);
       // Each chunk is committed as it arrives: a cut stream keeps everything received before it.

@@ -79,6 +79,14 @@ UploadState upload_row(const Result& rows, int row) {
           to_sha256(rows.bytes(row, 4))};
 }
 
+// The survey's uploads in name order, on a connection the caller may hold in a transaction.
+std::vector<UploadState> uploads_on(Connection& connection, std::int64_t survey_id) {
+  Result rows = connection.exec(std::string(kUploadColumns) + " WHERE survey_id = $1 ORDER BY name", {survey_id});
+  std::vector<UploadState> states;
+  for (int row = 0; row < rows.rows(); ++row) states.push_back(upload_row(rows, row));
+  return states;
+}
+
 Bytes token_hash(const std::string& token) { return digest_bytes(sha256(Bytes(token.begin(), token.end()))); }
 
 }  // namespace
@@ -241,13 +249,6 @@ void upsert_validation(Connection& connection, std::int64_t survey_id, const Val
        validation.summary.is_null() ? Param(std::nullopt) : Param(validation.summary.dump())});
 }
 
-bool same_uploads(const std::vector<UploadState>& a, const std::vector<UploadState>& b) {
-  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const UploadState& x, const UploadState& y) {
-    return x.name == y.name && x.size_bytes == y.size_bytes && x.committed_bytes == y.committed_bytes &&
-           x.complete == y.complete && x.sha256 == y.sha256;
-  });
-}
-
 }  // namespace
 
 void SurveyStore::save_validation(std::int64_t survey_id, const Validation& validation) {
@@ -260,10 +261,7 @@ bool SurveyStore::save_validation_if_unchanged(std::int64_t survey_id, const Val
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   connection->exec("SELECT 1 FROM surveys WHERE id = $1 FOR UPDATE", {survey_id});
-  Result rows = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 ORDER BY name", {survey_id});
-  std::vector<UploadState> now;
-  for (int row = 0; row < rows.rows(); ++row) now.push_back(upload_row(rows, row));
-  if (!same_uploads(now, validated)) return false;
+  if (uploads_on(*connection, survey_id) != validated) return false;
   upsert_validation(*connection, survey_id, validation);
   transaction.commit();
   return true;
@@ -448,10 +446,7 @@ std::optional<UploadState> SurveyStore::upload_state(std::int64_t survey_id, con
 
 std::vector<UploadState> SurveyStore::uploads(std::int64_t survey_id) {
   auto connection = pool_.acquire();
-  Result rows = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 ORDER BY name", {survey_id});
-  std::vector<UploadState> states;
-  for (int row = 0; row < rows.rows(); ++row) states.push_back(upload_row(rows, row));
-  return states;
+  return uploads_on(*connection, survey_id);
 }
 
 void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, std::ostream& out) {

@@ -50,6 +50,8 @@ struct UploadState {
   std::int64_t committed_bytes = 0;
   bool complete = false;
   Sha256 sha256{};
+
+  bool operator==(const UploadState&) const = default;
 };
 
 // Why an upload step was refused; the service turns the kind into a status code.
