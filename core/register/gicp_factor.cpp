@@ -1,5 +1,8 @@
 #include "core/register/gicp_factor.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/register/parallel_chunks.h"
 
 namespace bathyslam {
@@ -45,16 +48,6 @@ GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const
   return o;
 }
 
-GicpLinearisation& GicpLinearisation::operator+=(const GicpLinearisation& other) {
-  hessian += other.hessian;
-  gradient += other.gradient;
-  regularisation += other.regularisation;
-  cost += other.cost;
-  sq_distance_sum += other.sq_distance_sum;
-  correspondences += other.correspondences;
-  return *this;
-}
-
 namespace {
 
 struct Associations {
@@ -67,31 +60,128 @@ struct Associations {
 
 }  // namespace
 
+Associator::Associator(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                       double max_distance_m)
+    : target_(target),
+      source_(source),
+      overlap_(overlap),
+      gate_m_(static_cast<float>(max_distance_m)),
+      // A quarter beyond the gate: a point with no neighbour then is searched again only after it
+      // has moved by a quarter of the gate.
+      search_m_(static_cast<float>(1.25 * max_distance_m)),
+      remembered_(overlap.source_points.size()) {}
+
+std::vector<GicpCorrespondence> Associator::at(const Eigen::Isometry3d& source_to_target, int threads) {
+  // Float rounding of the distances and of the moved points, with room to spare.
+  constexpr float kSlackM = 1e-4f;
+  const Eigen::Isometry3f moved_by = source_to_target.cast<float>();
+  const uint8_t* allowed = overlap_.target_allowed.empty() ? nullptr : overlap_.target_allowed.data();
+  struct Found {
+    Associations associations;
+    std::size_t searches = 0;
+    Found& operator+=(const Found& o) {
+      associations += o.associations;
+      searches += o.searches;
+      return *this;
+    }
+  };
+  Found all = parallel_sum<Found>(overlap_.source_points.size(), threads, [&](Found& found, std::size_t begin, std::size_t end) {
+    found.associations.list.reserve(end - begin);
+    for (std::size_t k = begin; k < end; ++k) {
+      const uint32_t i = overlap_.source_points[k];
+      const Eigen::Vector3f x = moved_by * source_.points[i];
+      Remembered& r = remembered_[k];
+      const float moved = (x - r.searched_at).norm();  // NaN, so not below anything, if never searched
+      const bool same = r.found ? 2 * moved + kSlackM < r.second_m - r.nearest_m : moved + kSlackM < search_m_ - gate_m_;
+      if (!same) {
+        // The last two neighbours bound where the new two can be.
+        float bound = search_m_ * search_m_;
+        if (r.found_second) {
+          bound = std::min(bound, std::max((x - target_.points[r.nearest]).squaredNorm(),
+                                           (x - target_.points[r.second]).squaredNorm()) * (1 + 1e-5f) + 1e-9f);
+        }
+        const PointTree::TwoNearest two = target_.tree->nearest_two(x, bound, allowed);
+        r = {x, two.index, two.second_index, two.found, two.found_second, std::sqrt(two.sq_distance),
+             two.found_second ? std::sqrt(two.second_sq_distance) : search_m_};
+        ++found.searches;
+      }
+      if (r.found && (x - target_.points[r.nearest]).squaredNorm() <= gate_m_ * gate_m_) {
+        found.associations.list.push_back({i, r.nearest});
+      }
+    }
+  });
+  searches_ += all.searches;
+  return std::move(all.associations.list);
+}
+
 std::vector<GicpCorrespondence> associate_gicp(const GicpCloud& target, const GicpCloud& source,
                                                const GicpOverlap& overlap, const Eigen::Isometry3d& source_to_target,
                                                double max_distance_m, int threads) {
-  const Eigen::Isometry3f moved_by = source_to_target.cast<float>();
-  const float max_sq = static_cast<float>(max_distance_m * max_distance_m);
-  const uint8_t* allowed = overlap.target_allowed.empty() ? nullptr : overlap.target_allowed.data();
-  return parallel_sum<Associations>(overlap.source_points.size(), threads,
-                                    [&](Associations& found, std::size_t begin, std::size_t end) {
-    found.list.reserve(end - begin);
-    for (std::size_t k = begin; k < end; ++k) {
-      const uint32_t i = overlap.source_points[k];
-      uint32_t j = 0;
-      float sq_distance = 0;
-      if (target.tree->nearest(moved_by * source.points[i], max_sq, allowed, j, sq_distance)) found.list.push_back({i, j});
-    }
-  }).list;
+  return Associator(target, source, overlap, max_distance_m).at(source_to_target, threads);
 }
+
+namespace {
+
+// Σ Jᵀ M J and Σ Jᵀ M d by their 3×3 blocks, with J = [I, -[y]×], y = x - c, so that a
+// correspondence costs a few 3×3 products instead of 6×6 ones; and Σ y, Σ y yᵀ, from which the
+// regularisation Σ Jᵀ ½ J follows in closed form (it does not depend on M).
+struct NormalEquationSums {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();         // Σ M
+  Eigen::Matrix3d m_skew = Eigen::Matrix3d::Zero();    // Σ M [y]×
+  Eigen::Matrix3d skew_m_skew = Eigen::Matrix3d::Zero();  // Σ [y]× M [y]×
+  Eigen::Vector3d md = Eigen::Vector3d::Zero();        // Σ M d
+  Eigen::Vector3d y_cross_md = Eigen::Vector3d::Zero();  // Σ y × M d
+  Eigen::Vector3d y = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d yy = Eigen::Matrix3d::Zero();
+  double cost = 0, sq_distance_sum = 0;
+  std::size_t correspondences = 0;
+
+  NormalEquationSums& operator+=(const NormalEquationSums& o) {
+    m += o.m;
+    m_skew += o.m_skew;
+    skew_m_skew += o.skew_m_skew;
+    md += o.md;
+    y_cross_md += o.y_cross_md;
+    y += o.y;
+    yy += o.yy;
+    cost += o.cost;
+    sq_distance_sum += o.sq_distance_sum;
+    correspondences += o.correspondences;
+    return *this;
+  }
+
+  GicpLinearisation linearisation(bool with_regularisation) const {
+    GicpLinearisation out;
+    // JᵀMJ = [[M, -M S], [S M, -S M S]] and JᵀMd = [M d, y × M d] for S = [y]× (Sᵀ = -S).
+    out.hessian.topLeftCorner<3, 3>() = m;
+    out.hessian.topRightCorner<3, 3>() = -m_skew;
+    out.hessian.bottomLeftCorner<3, 3>() = -m_skew.transpose();
+    out.hessian.bottomRightCorner<3, 3>() = -skew_m_skew;
+    out.gradient << md, y_cross_md;
+    if (with_regularisation) {
+      // ½ JᵀJ = ½ [[I, -S], [S, |y|² I - y yᵀ]], summed.
+      const double n = static_cast<double>(correspondences);
+      out.regularisation.topLeftCorner<3, 3>() = 0.5 * n * Eigen::Matrix3d::Identity();
+      out.regularisation.topRightCorner<3, 3>() = -0.5 * skew(y);
+      out.regularisation.bottomLeftCorner<3, 3>() = 0.5 * skew(y);
+      out.regularisation.bottomRightCorner<3, 3>() = 0.5 * (yy.trace() * Eigen::Matrix3d::Identity() - yy);
+    }
+    out.cost = cost;
+    out.sq_distance_sum = sq_distance_sum;
+    out.correspondences = correspondences;
+    return out;
+  }
+};
+
+}  // namespace
 
 GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& source,
                                  const std::vector<GicpCorrespondence>& correspondences,
                                  const Eigen::Isometry3d& source_to_target, const Eigen::Vector3d& pivot, int threads,
                                  bool with_regularisation) {
   const Eigen::Matrix3d r = source_to_target.rotation();
-  return parallel_sum<GicpLinearisation>(correspondences.size(), threads,
-                                         [&](GicpLinearisation& sum, std::size_t begin, std::size_t end) {
+  return parallel_sum<NormalEquationSums>(correspondences.size(), threads,
+                                          [&](NormalEquationSums& sum, std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {
       const uint32_t i = correspondences[k].source, j = correspondences[k].target;
       const Eigen::Vector3d x = source_to_target * source.points[i].cast<double>();
@@ -102,18 +192,24 @@ GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& sourc
       const Eigen::Matrix3d combined = 2 * Eigen::Matrix3d::Identity() - (1 - GicpCloud::kPlaneEpsilon) *
                                        (n_target * n_target.transpose() + n_source * n_source.transpose());
       const Eigen::Matrix3d m = combined.inverse();
-      Eigen::Matrix<double, 3, 6> jacobian;
-      jacobian.leftCols<3>().setIdentity();
-      jacobian.rightCols<3>() = -skew(x - pivot);
-      const Eigen::Matrix<double, 6, 3> jt_m = jacobian.transpose() * m;
-      sum.hessian.noalias() += jt_m * jacobian;
-      sum.gradient.noalias() += jt_m * d;
-      if (with_regularisation) sum.regularisation.noalias() += 0.5 * jacobian.transpose() * jacobian;
-      sum.cost += 0.5 * d.dot(m * d);
+      const Eigen::Vector3d y = x - pivot;
+      const Eigen::Matrix3d s = skew(y);
+      const Eigen::Matrix3d ms = m * s;
+      const Eigen::Vector3d md = m * d;
+      sum.m += m;
+      sum.m_skew += ms;
+      sum.skew_m_skew.noalias() += s * ms;
+      sum.md += md;
+      sum.y_cross_md += y.cross(md);
+      if (with_regularisation) {
+        sum.y += y;
+        sum.yy.noalias() += y * y.transpose();
+      }
+      sum.cost += 0.5 * d.dot(md);
       sum.sq_distance_sum += d.squaredNorm();
       ++sum.correspondences;
     }
-  });
+  }).linearisation(with_regularisation);
 }
 
 GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,

@@ -34,7 +34,37 @@ struct GicpCorrespondence {
   uint32_t source = 0, target = 0;
 };
 
-// Every overlap source point's correspondence at `source_to_target`, in overlap order.
+// Associates the overlap's source points with their nearest allowed target points within a
+// gate, at pose after pose of one registration. GICP's later iterations move the source by
+// millimetres, where most neighbours cannot have changed: a point that has moved by δ since its
+// last search keeps its neighbour if 2δ < d₂ - d₁ (d₁, d₂: distances to the nearest and second
+// nearest then, the triangle inequality), and keeps having none within the gate if no point lay
+// within `search_m` and δ < search_m - gate. Only the others are searched again, and no farther
+// than the farther of their last two neighbours, so the answer is exactly a full search's.
+class Associator {
+ public:
+  Associator(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap, double max_distance_m);
+
+  // Every overlap source point's correspondence at `source_to_target`, in overlap order.
+  std::vector<GicpCorrespondence> at(const Eigen::Isometry3d& source_to_target, int threads);
+  std::size_t searches() const { return searches_; }  // how many tree searches so far
+
+ private:
+  struct Remembered {
+    Eigen::Vector3f searched_at = Eigen::Vector3f::Constant(NAN);  // moved source point; NaN: never
+    uint32_t nearest = 0, second = 0;
+    bool found = false, found_second = false;
+    float nearest_m = 0, second_m = 0;  // distances then; second_m = search_m if there was none
+  };
+  const GicpCloud& target_;
+  const GicpCloud& source_;
+  const GicpOverlap& overlap_;
+  float gate_m_, search_m_;
+  std::vector<Remembered> remembered_;  // one per overlap source point
+  std::size_t searches_ = 0;
+};
+
+// One association from scratch (Associator::at).
 std::vector<GicpCorrespondence> associate_gicp(const GicpCloud& target, const GicpCloud& source,
                                                const GicpOverlap& overlap, const Eigen::Isometry3d& source_to_target,
                                                double max_distance_m, int threads);
@@ -48,8 +78,6 @@ struct GicpLinearisation {
   double cost = 0;                        // ½ Σ dᵀ M d
   double sq_distance_sum = 0;             // Σ |d|² (Euclidean, for the overlap MSE)
   std::size_t correspondences = 0;
-
-  GicpLinearisation& operator+=(const GicpLinearisation& other);
 };
 
 // Linearises the cost of fixed correspondences at `source_to_target` about `pivot` (target frame).

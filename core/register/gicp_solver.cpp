@@ -4,14 +4,14 @@
 
 #include <Eigen/Dense>
 
+#include "core/register/anderson.h"
+
 namespace bathyslam {
 namespace {
 
-// The inner Gauss–Newton iterations over one association stop when a step changes the answer
-// by less than this share of the pass's own rule, or after this many.
-constexpr double kInnerShare = 0.1;
-constexpr int kMaxInnerIterations = 2;
 constexpr double kFloatResolutionM = 1e-5;
+// Answers Anderson mixes: a handful, as AA-ICP found enough.
+constexpr int kAndersonDepth = 5;
 
 // x' = exp(δθ)(x - c) + c + δt: the perturbation the factors are linearised for.
 Eigen::Isometry3d perturbed(const Eigen::Isometry3d& t, const Vector6d& step, const Eigen::Vector3d& pivot) {
@@ -55,6 +55,32 @@ Vector6d observed_step(const GicpLinearisation& lin, double min_share) {
   return v * reduced.ldlt().solve(-v.transpose() * lin.gradient);
 }
 
+// The coordinates of `t` as a perturbation of `start` about `pivot` (perturbed), rotations in
+// metres at `lever_m`, and back: where Anderson mixes the answers.
+Vector6d coordinates(const Eigen::Isometry3d& t, const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
+                     double lever_m) {
+  const Eigen::Isometry3d move = t * start.inverse();
+  const Eigen::AngleAxisd rotation(move.linear());
+  Vector6d v;
+  v << move.translation() - pivot + move.linear() * pivot, lever_m * rotation.angle() * rotation.axis();
+  return v;
+}
+
+Eigen::Isometry3d pose_at(const Vector6d& v, const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
+                          double lever_m) {
+  Vector6d step;
+  step << v.head<3>(), v.tail<3>() / lever_m;
+  return perturbed(start, step, pivot);
+}
+
+// RMS distance of the associated source points from the pivot at `t`: how far a rotation moves them.
+double rms_lever(const GicpCloud& source, const std::vector<GicpCorrespondence>& correspondences,
+                 const Eigen::Isometry3d& t, const Eigen::Vector3d& pivot) {
+  double sum = 0;
+  for (const GicpCorrespondence& c : correspondences) sum += (t * source.points[c.source].cast<double>() - pivot).squaredNorm();
+  return correspondences.empty() ? 1.0 : std::max(std::sqrt(sum / static_cast<double>(correspondences.size())), 1.0);
+}
+
 bool small_change(const Eigen::Isometry3d& before, const Eigen::Isometry3d& after, double convergence,
                   double rotation_share = 1.0) {
   const double rotation = (after.linear() - before.linear()).cwiseAbs().maxCoeff() / (rotation_share * kGicpRotationEpsilon);
@@ -82,10 +108,10 @@ Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& over
   return overlap.source_points.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(overlap.source_points.size()));
 }
 
-GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
-                                  const Eigen::Vector3d& source_pivot, double max_correspondence_m,
-                                  double convergence, int max_iterations, double min_observed_share, int threads) {
+                                  const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
+                                  double min_observed_share, double max_turn_rad, int threads) {
   const Eigen::Translation3d to_pivot(-pivot), from_source_pivot(source_pivot);
   auto centred = [&](const Eigen::Isometry3d& t) { return Eigen::Isometry3d(to_pivot * t * from_source_pivot); };
   // Float soundings cannot tell apart poses closer than their resolution (a float 100 m from
@@ -95,37 +121,61 @@ GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& sour
   GaussNewtonPass pass;
   pass.source_to_target = start;
   std::vector<Eigen::Isometry3d> answers{centred(start)};  // to see a cycle
+  AndersonAcceleration anderson(kAndersonDepth);
+  Eigen::Isometry3d at = start;        // where the next association is made
+  bool accelerated = false;            // `at` is Anderson's mix, not the last answer
+  double last_cost = INFINITY;         // mean cost per correspondence at the last point kept
+  double lever_m = 0;                  // rotations in metres at the overlap, for Anderson's mix
   while (pass.iterations < max_iterations) {
     // As PCL: associate, then minimise over those correspondences (PCL: BFGS, at most 20 inner
-    // iterations; here Gauss–Newton, which needs a few), then compare with the last answer. An
-    // association that no longer changes then gives the same answer, and the rule ends the pass.
-    const std::vector<GicpCorrespondence> correspondences =
-        associate_gicp(target, source, overlap, pass.source_to_target, max_correspondence_m, threads);
-    // PCL's BFGS refuses fewer than 4 correspondences and the registration then fails.
-    if (correspondences.size() < 4) return pass;
-    Eigen::Isometry3d next = pass.source_to_target;
-    for (int inner = 0; inner < kMaxInnerIterations; ++inner) {
-      const GicpLinearisation lin =
-          linearise_gicp(target, source, correspondences, next, pivot, threads, min_observed_share > 0);
-      const Vector6d step = observed_step(lin, min_observed_share);
-      if (!step.allFinite()) return pass;
-      const Eigen::Isometry3d stepped = perturbed(next, step, pivot);
-      const bool settled = small_change(centred(next), centred(stepped), kInnerShare * convergence, kInnerShare);
-      next = stepped;
-      if (settled) break;
-    }
+    // iterations; here one Gauss–Newton step, as AA-ICP takes: more steps on the same
+    // correspondences cost a linearisation each and, with Anderson's mix, no iterations), then
+    // compare with the last answer. An association that no longer changes then gives the same
+    // answer, and the rule ends the pass.
+    const std::vector<GicpCorrespondence> correspondences = associator.at(at, threads);
     ++pass.iterations;
+    // PCL's BFGS refuses fewer than 4 correspondences and the registration then fails.
+    if (correspondences.size() < 4 && !accelerated) return pass;
+    if (lever_m == 0) lever_m = rms_lever(source, correspondences, at, pivot);
+    Eigen::Isometry3d next = at;
+    double cost = INFINITY;  // mean per correspondence at `at`
+    if (correspondences.size() >= 4) {
+      const GicpLinearisation lin =
+          linearise_gicp(target, source, correspondences, at, pivot, threads, min_observed_share > 0);
+      cost = lin.cost / static_cast<double>(lin.correspondences);
+      const Vector6d step = observed_step(lin, min_observed_share);
+      if (step.allFinite()) {
+        next = perturbed(at, step, pivot);
+      } else if (!accelerated) {
+        return pass;
+      } else {
+        cost = INFINITY;  // drop the mix
+      }
+    }
+    // A mix that fits worse than the last answer did is dropped for that answer (AA-ICP's guard).
+    if (accelerated && !(cost <= last_cost)) {
+      at = pass.source_to_target;
+      accelerated = false;
+      anderson.reset();
+      continue;
+    }
+    last_cost = cost;
     // Converged by PCL's rule, or caught in a cycle: a few points near the gate or midway
     // between two target points swap their nearest neighbour back and forth and the answer
     // returns to an earlier one. PCL's rule alone never ends such a cycle at the refinement's
     // tight epsilon; the answers in it agree within `convergence`.
     const Eigen::Isometry3d centred_next = centred(next);
-    const bool done = std::any_of(answers.begin(), answers.end(), [&](const Eigen::Isometry3d& earlier) {
-      return small_change(earlier, centred_next, convergence);
-    });
+    const bool done = small_change(centred(at), centred_next, convergence) ||
+                      std::any_of(answers.begin(), answers.end(), [&](const Eigen::Isometry3d& earlier) {
+                        return small_change(earlier, centred_next, convergence);
+                      });
     answers.push_back(centred_next);
     pass.source_to_target = next;
     if (done) break;
+    if (Eigen::AngleAxisd(start.linear().transpose() * next.linear()).angle() > max_turn_rad) return pass;
+    const Vector6d mixed = anderson.next(coordinates(at, start, pivot, lever_m), coordinates(next, start, pivot, lever_m));
+    at = pose_at(mixed, start, pivot, lever_m);
+    accelerated = !small_change(at, next, kFloatResolutionM, kFloatResolutionM);
   }
   pass.converged = true;  // PCL: converged on a small change or at the iteration limit
   return pass;
@@ -139,14 +189,16 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
   const Eigen::Vector3d pivot = config.about_centroid ? target_centroid(target, overlap) : Eigen::Vector3d::Zero();
   const Eigen::Vector3d source_pivot = config.about_centroid ? source_centroid(source, overlap) : Eigen::Vector3d::Zero();
   const int threads = std::max(config.threads, 1);
-  GaussNewtonPass pass = gauss_newton_gicp(target, source, overlap, guess, pivot, source_pivot,
-                                           config.max_correspondence_m, config.convergence, config.max_iterations,
-                                           config.min_observed_share, threads);
+  Associator at_gate(target, source, overlap, config.max_correspondence_m);
+  const double max_turn_rad = config.max_turn_deg * M_PI / 180;
+  GaussNewtonPass pass = gauss_newton_gicp(target, source, at_gate, guess, pivot, source_pivot, config.convergence,
+                                           config.max_iterations, config.min_observed_share, max_turn_rad, threads);
   if (config.refine_correspondence_m > 0) {
+    Associator at_refine_gate(target, source, overlap, config.refine_correspondence_m);
     const GaussNewtonPass refined =
-        gauss_newton_gicp(target, source, overlap, pass.source_to_target, pivot, source_pivot,
-                          config.refine_correspondence_m, config.refine_convergence, config.max_iterations,
-                          config.min_observed_share, threads);
+        gauss_newton_gicp(target, source, at_refine_gate, pass.source_to_target, pivot, source_pivot,
+                          config.refine_convergence, config.max_iterations, config.min_observed_share,
+                          max_turn_rad, threads);
     pass = {refined.source_to_target, pass.converged && refined.converged, pass.iterations + refined.iterations};
   }
   PreparedRegistration out;
@@ -154,8 +206,8 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
   // Quality (and the Hessian) at Table 1's gate whatever pass produced the answer, as the wrapper
   // measures it: one more association at the answer.
   const Eigen::Vector3d anchor = hessian_anchor != nullptr ? pass.source_to_target * *hessian_anchor : Eigen::Vector3d::Zero();
-  const GicpLinearisation at_answer = linearise_gicp(target, source, overlap, pass.source_to_target, anchor,
-                                                     config.max_correspondence_m, threads, hessian_anchor != nullptr);
+  const GicpLinearisation at_answer = linearise_gicp(target, source, at_gate.at(pass.source_to_target, threads),
+                                                     pass.source_to_target, anchor, threads, hessian_anchor != nullptr);
   RegistrationQuality& q = out.registration.quality;
   q.converged = pass.converged;
   q.overlap_points = at_answer.correspondences;

@@ -22,16 +22,17 @@ struct GaussNewtonPass {
   int iterations = 0;
 };
 
-// One pass from `start`. Directions the terrain observes less than `min_observed_share` of the
-// best-observed one keep their value (gicp_solver.cpp, observed_step). The rotation turns about `pivot` (target frame) and the convergence
+// One pass from `start`, associating with `associator` (its gate). Directions the terrain
+// observes less than `min_observed_share` of the best-observed one keep their value
+// (gicp_solver.cpp, observed_step). The rotation turns about `pivot` (target frame) and the convergence
 // rule compares the transform between the frames centred there and at `source_pivot` (source
 // frame), which is what PCL sees when the wrapper shifts the clouds (about_centroid). As in PCL,
 // reaching `max_iterations` counts as converged; too few correspondences or a singular system
-// does not.
-GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+// does not, nor does turning by more than `max_turn_rad` from `start`.
+GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
-                                  const Eigen::Vector3d& source_pivot, double max_correspondence_m,
-                                  double convergence, int max_iterations, double min_observed_share, int threads);
+                                  const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
+                                  double min_observed_share, double max_turn_rad, int threads);
 
 struct PreparedRegistration {
   Registration registration;

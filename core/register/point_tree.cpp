@@ -3,30 +3,39 @@
 namespace bathyslam {
 namespace {
 
-// nanoflann result set for one nearest neighbour that skips masked points and starts with the
-// correspondence gate as its bound, so the search prunes everything beyond the gate.
-class MaskedNearest {
+// nanoflann result set for the two nearest points that skips masked points and starts with the
+// search bound as its worst distance, so the search prunes everything beyond it.
+class MaskedTwoNearest {
  public:
-  MaskedNearest(float max_sq_distance, const uint8_t* allowed) : worst_(max_sq_distance), allowed_(allowed) {}
+  MaskedTwoNearest(float max_sq_distance, const uint8_t* allowed)
+      : best_(max_sq_distance), second_(max_sq_distance), allowed_(allowed) {}
   bool full() const { return found_; }
-  float worstDist() const { return worst_; }
+  float worstDist() const { return second_; }
   bool addPoint(float sq_distance, uint32_t index) {
     if (allowed_ != nullptr && !allowed_[index]) return true;
-    if (sq_distance <= worst_) {
-      worst_ = sq_distance;
+    if (sq_distance <= best_) {
+      if (found_) {
+        second_ = best_;
+        second_index_ = index_;
+        found_second_ = true;
+      }
+      best_ = sq_distance;
       index_ = index;
       found_ = true;
+    } else if (sq_distance < second_) {
+      second_ = sq_distance;
+      second_index_ = index;
+      found_second_ = true;
     }
     return true;
   }
-  bool found() const { return found_; }
-  uint32_t index() const { return index_; }
+  PointTree::TwoNearest result() const { return {found_, index_, best_, found_second_, second_index_, second_}; }
 
  private:
-  float worst_;
+  float best_, second_;
   const uint8_t* allowed_;
-  uint32_t index_ = 0;
-  bool found_ = false;
+  uint32_t index_ = 0, second_index_ = 0;
+  bool found_ = false, found_second_ = false;
 };
 
 }  // namespace
@@ -45,15 +54,12 @@ std::size_t PointTree::nearest_k(const Eigen::Vector3f& query, std::size_t k, ui
   return index_->knnSearch(query.data(), k, indices, sq_distances);
 }
 
-bool PointTree::nearest(const Eigen::Vector3f& query, float max_sq_distance, const uint8_t* allowed,
-                        uint32_t& index, float& sq_distance) const {
-  if (adaptor_.points.empty()) return false;
-  MaskedNearest result(max_sq_distance, allowed);
+PointTree::TwoNearest PointTree::nearest_two(const Eigen::Vector3f& query, float max_sq_distance,
+                                            const uint8_t* allowed) const {
+  if (adaptor_.points.empty()) return {false, 0, 0, false, 0, max_sq_distance};
+  MaskedTwoNearest result(max_sq_distance, allowed);
   index_->findNeighbors(result, query.data(), nanoflann::SearchParams());
-  if (!result.found()) return false;
-  index = result.index();
-  sq_distance = result.worstDist();
-  return true;
+  return result.result();
 }
 
 }  // namespace bathyslam

@@ -22,11 +22,19 @@ class PointTree {
   // The k nearest points (fewer if the cloud is smaller), nearest first; returns how many.
   std::size_t nearest_k(const Eigen::Vector3f& query, std::size_t k, uint32_t* indices, float* sq_distances) const;
 
-  // The nearest point with `allowed[index]` set (all points if `allowed` is null) within
-  // sqrt(max_sq_distance); false if there is none. The mask is how a pair registers only its
-  // predicted overlap on a tree of the whole submap.
-  bool nearest(const Eigen::Vector3f& query, float max_sq_distance, const uint8_t* allowed, uint32_t& index,
-               float& sq_distance) const;
+  // The nearest and second-nearest points with `allowed[index]` set (all points if `allowed` is
+  // null) within sqrt(max_sq_distance). The second's distance is what proves the nearest
+  // unchanged after a small move (Associator, gicp_factor.h). The mask is how a pair registers
+  // only its predicted overlap on a tree of the whole submap.
+  struct TwoNearest {
+    bool found = false;
+    uint32_t index = 0;     // the nearest, if found
+    float sq_distance = 0;  // to it
+    bool found_second = false;
+    uint32_t second_index = 0;
+    float second_sq_distance = 0;  // to the second nearest; max_sq_distance if there is none
+  };
+  TwoNearest nearest_two(const Eigen::Vector3f& query, float max_sq_distance, const uint8_t* allowed) const;
 
  private:
   struct Adaptor {

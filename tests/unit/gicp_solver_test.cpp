@@ -90,6 +90,63 @@ TEST(OwnGicp, RecoversAKnownOffsetOnMounds) {
   }
 }
 
+// The associator's shortcut (keep a neighbour the triangle inequality proves unchanged) gives
+// exactly what a brute-force search gives, over moves from centimetres to a metre and back.
+TEST(OwnGicp, AssociatorFindsTheBruteForceNeighbours) {
+  const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
+  const auto target = prepare_gicp_cloud(*p.target, 20);
+  const auto source = prepare_gicp_cloud(*p.source, 20);
+  const GicpOverlap overlap = gicp_overlap(*target, *source, p.truth, 1.0);
+  ASSERT_GT(overlap.target_points, 1000u);
+  ASSERT_LT(overlap.target_points, target->points.size()) << "the mask must matter";
+  const double gate_m = 1.0;
+  Associator associator(*target, *source, overlap, gate_m);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> step(0.0, 1.0);
+  Eigen::Isometry3d pose = off(p.truth);
+  std::size_t compared = 0, associated = 0;
+  for (int move = 0; move < 24; ++move) {
+    const double size_m = move < 12 ? 0.003 : 0.3;  // creeping, then jumping
+    pose = planar_pose(size_m * step(rng), size_m * step(rng), 2 * size_m * step(rng)) * pose;
+    const std::vector<GicpCorrespondence> found = associator.at(pose, 1);
+    associated += found.size();
+    std::vector<int> neighbour(source->points.size(), -1);
+    for (const GicpCorrespondence& c : found) neighbour[c.source] = static_cast<int>(c.target);
+    // Brute force on every fifth overlap point (all of them would take seconds).
+    const Eigen::Isometry3f moved_by = pose.cast<float>();
+    for (std::size_t k = 0; k < overlap.source_points.size(); k += 5) {
+      const Eigen::Vector3f x = moved_by * source->points[overlap.source_points[k]];
+      float best = static_cast<float>(gate_m * gate_m);
+      int nearest = -1;
+      for (std::size_t j = 0; j < target->points.size(); ++j) {
+        const float d = (x - target->points[j]).squaredNorm();
+        if (overlap.target_allowed[j] && d <= best) best = d, nearest = static_cast<int>(j);
+      }
+      const int got = neighbour[overlap.source_points[k]];
+      ASSERT_EQ(got >= 0, nearest >= 0) << "move " << move << ", point " << k;
+      // Equidistant neighbours may come in either order: the distance is what must agree.
+      if (got >= 0) {
+        ASSERT_NEAR((x - target->points[got]).squaredNorm(), best, 1e-6) << "move " << move;
+      }
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 10000u);
+  EXPECT_LT(associator.searches(), associated * 9 / 10) << "the shortcut hardly applied";
+}
+
+// A pass that turns further from its start than max_turn_deg has left its basin: it ends, not
+// converged; the same pass within the limit converges.
+TEST(OwnGicp, APassThatTurnsBeyondTheLimitDoesNotConverge) {
+  const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
+  GicpConfig config = ours();
+  const PairRegistration within = register_direct(*p.target, *p.source, off(p.truth), config, 1.0);
+  EXPECT_TRUE(within.registration.quality.converged);
+  config.max_turn_deg = 1.0;  // the guess is 3 degrees off
+  const PairRegistration beyond = register_direct(*p.target, *p.source, off(p.truth), config, 1.0);
+  EXPECT_FALSE(beyond.registration.quality.converged);
+}
+
 TEST(OwnGicp, AgreesWithPclOnAnAdjacentLinePairOfASimulatedSurvey) {
   const SubmapSet set = true_small_submaps(4);
   const std::vector<Eigen::Isometry3d> poses = poses_of(set);

@@ -25,13 +25,13 @@ TEST(Parameters, SetByNameReachesTheStageConfig) {
   EXPECT_EQ(all.at("registration.gicp.max_correspondence_m"), 3.0);  // Table 1 default untouched
 }
 
-TEST(Parameters, GicpEngineIsPclUnlessAskedForOurs) {
+TEST(Parameters, GicpEngineIsOursUnlessAskedForPcls) {
   PipelineConfig config;
-  EXPECT_EQ(parameters(config).at("registration.gicp.engine"), 0.0);
-  set_parameter(config, "registration.gicp.engine=1");
-  EXPECT_EQ(config.registration.gicp.engine, 1);
+  EXPECT_EQ(parameters(config).at("registration.gicp.engine"), 1.0);
+  set_parameter(config, "registration.gicp.engine=0");
+  EXPECT_EQ(config.registration.gicp.engine, 0);
   EXPECT_THROW(set_parameter(config, "registration.gicp.engine=2"), std::invalid_argument);
-  EXPECT_EQ(config.registration.gicp.engine, 1);
+  EXPECT_EQ(config.registration.gicp.engine, 0);
 }
 
 TEST(Parameters, BadNamesAndValuesAreRejectedByName) {

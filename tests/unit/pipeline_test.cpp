@@ -94,7 +94,9 @@ TEST(ParallelFor, RunsOnTheThreadsItIsGiven) {
       seen.insert(std::this_thread::get_id());
     });
     EXPECT_LE(static_cast<int>(seen.size()), threads);
-    if (threads == 2) EXPECT_EQ(seen.size(), 2u) << "64 iterations of 2 ms on 2 threads use both";
+    if (threads == 2) {
+      EXPECT_EQ(seen.size(), 2u) << "64 iterations of 2 ms on 2 threads use both";
+    }
   }
 }
 
