@@ -43,17 +43,27 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
   const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
   const Cloud& target = *in.clouds[pair.target];
   const Cloud& source = *in.clouds[pair.source];
-  const PreparedPair prepared = prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source);
+  auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source); };
   PairRegistration reg;
   if (plan.features) {
     // RANSAC reproducible per pair, whatever thread or batch registers it.
     const uint64_t seed = config.registration.ransac.seed ^
                           (static_cast<uint64_t>(pair.target) << 32 | static_cast<uint64_t>(pair.source));
-    reg = register_coarse_to_fine(target, source, in.features[pair.target], in.features[pair.source], guess,
-                                  config.registration, seed, with_hessian, prepared);
+    const SubmapFeatures& target_features = in.features[pair.target];
+    const SubmapFeatures& source_features = in.features[pair.source];
+    const CoarseStart coarse = coarse_start(target_features, source_features, guess, config.registration, seed);
+    // Acceptance lets only the feature-aided path close a loop (rejection_of): a loop the switch
+    // sends down the direct path is refused whatever GICP would answer, so GICP is not run (a
+    // third of `lake`'s registrations).
+    if (plan.quality_aware && candidate.type == ConstraintType::kLoop && coarse.path == RegistrationPath::kDirect) {
+      reg = unregistered(coarse, guess);
+    } else {
+      reg = register_from_start(coarse, target, source, target_features, source_features, config.registration,
+                                with_hessian, prepared());
+    }
   } else {
     reg = register_direct(target, source, guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian,
-                          prepared);
+                          prepared());
   }
   Constraint c = constraint_of(candidate, reg, guess);
   if (plan.quality_aware) {

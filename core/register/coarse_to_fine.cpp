@@ -120,11 +120,9 @@ CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeat
   return c;
 }
 
-PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
-                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian,
-                                         PreparedPair prepared) {
-  const CoarseStart c = coarse_start(target_features, source_features, guess, config, seed);
+PairRegistration register_from_start(const CoarseStart& c, const Cloud& target, const Cloud& source,
+                                     const SubmapFeatures& target_features, const SubmapFeatures& source_features,
+                                     const CoarseToFineConfig& config, bool with_hessian, PreparedPair prepared) {
   PairRegistration r = register_direct(target, source, c.start, c.gicp, config.crop_margin_m, with_hessian, prepared);
   r.path = c.path;
   r.why = c.why;
@@ -138,6 +136,25 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
   }
   r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
   return r;
+}
+
+PairRegistration unregistered(const CoarseStart& c, const Eigen::Isometry3d& guess) {
+  PairRegistration r;
+  r.path = c.path;
+  r.why = c.why;
+  r.feature_density = c.feature_density;
+  r.matches = c.matches;
+  r.coarse = guess;
+  r.registration.source_to_target = guess;
+  return r;
+}
+
+PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+                                         const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian,
+                                         PreparedPair prepared) {
+  return register_from_start(coarse_start(target_features, source_features, guess, config, seed), target, source,
+                             target_features, source_features, config, with_hessian, prepared);
 }
 
 }  // namespace bathyslam

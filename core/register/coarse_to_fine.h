@@ -111,10 +111,21 @@ struct CoarseStart {
 CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeatures& source_features,
                          const Eigen::Isometry3d& guess, const CoarseToFineConfig& config, uint64_t seed);
 
+// The fine half: GICP from the coarse start, with the uniqueness probe about its answer.
+PairRegistration register_from_start(const CoarseStart& coarse, const Cloud& target, const Cloud& source,
+                                     const SubmapFeatures& target_features, const SubmapFeatures& source_features,
+                                     const CoarseToFineConfig& config, bool with_hessian = false,
+                                     PreparedPair prepared = {});
+
+// A pair left unregistered after the coarse half: its switch decision, and `guess` as its answer,
+// not converged and with no overlap measured.
+PairRegistration unregistered(const CoarseStart& coarse, const Eigen::Isometry3d& guess);
+
 // The pair's submaps from `cache` when our GICP registers (gicp.engine 1), none for PCL's.
 PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source);
 
-// `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC reproducible per pair.
+// Both halves. `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC
+// reproducible per pair.
 // `with_hessian`: also the GICP cost's Hessian at the result (PairRegistration::hessian), for
 // quality.information_from_hessian; it costs about as much again as the registration, so only
 // the information that needs it asks.
