@@ -9,6 +9,10 @@
 namespace bathyslam {
 namespace {
 
+// Submaps prepared for our GICP kept between batches: `lake` (~350 MB) keeps all; `large`
+// keeps the last lines', which its next pairs reuse, instead of growing by ~1 MB a submap.
+constexpr std::size_t kPreparedSubmapsBudgetBytes = std::size_t{1} << 30;
+
 class StageClock {
  public:
   explicit StageClock(std::vector<StageTiming>& timings) : timings_(timings) {}
@@ -71,6 +75,7 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     }
     const std::vector<Candidate> candidates = candidates_ending_in(r.submaps, estimate, begin, end, config.candidates, plan);
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
+    inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
     if (plan.consistency) select_consistent_registrations(r.constraints, inputs.dr, r.dr_poses, config.robustness.pcm);
     if (end < n && !candidates.empty()) estimate = solve(estimate, r.constraints, config.graph).poses;
     if (progress) progress("register", static_cast<double>(end) / n);

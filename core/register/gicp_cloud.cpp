@@ -1,5 +1,7 @@
 #include "core/register/gicp_cloud.h"
 
+#include <algorithm>
+
 #include <Eigen/Eigenvalues>
 
 #include "core/register/parallel_chunks.h"
@@ -69,12 +71,52 @@ void GicpCloud::ensure_normals(const std::vector<uint32_t>& indices, int threads
   });
 }
 
+std::size_t GicpCloud::bytes() const {
+  // The tree: nanoflann's nodes and its index permutation, about 8 bytes a point at 16 a leaf.
+  return points.size() * (sizeof(Eigen::Vector3f) * 2 + sizeof(uint8_t) + 8);
+}
+
 GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours)
-    : clouds_(clouds), neighbours_(neighbours), built_(clouds.size()), prepared_(clouds.size()) {}
+    : clouds_(clouds), neighbours_(neighbours), entries_(clouds.size()) {}
 
 const GicpCloud& GicpCloudCache::at(std::size_t submap) {
-  std::call_once(built_.at(submap), [&] { prepared_[submap] = prepare_gicp_cloud(*clouds_[submap], neighbours_); });
-  return *prepared_[submap];
+  std::shared_ptr<Entry> entry;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    std::shared_ptr<Entry>& slot = entries_.at(submap);
+    if (!slot) slot = std::make_shared<Entry>();
+    slot->last_used = ++uses_;
+    entry = slot;
+  }
+  std::call_once(entry->built, [&] { entry->cloud = prepare_gicp_cloud(*clouds_[submap], neighbours_); });
+  return *entry->cloud;
+}
+
+std::size_t GicpCloudCache::bytes() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::size_t sum = 0;
+  for (const std::shared_ptr<Entry>& e : entries_) {
+    if (e && e->cloud) sum += e->cloud->bytes();
+  }
+  return sum;
+}
+
+void GicpCloudCache::trim(std::size_t budget_bytes) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::size_t> held;
+  std::size_t sum = 0;
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    if (entries_[i] && entries_[i]->cloud) {
+      held.push_back(i);
+      sum += entries_[i]->cloud->bytes();
+    }
+  }
+  std::sort(held.begin(), held.end(), [&](std::size_t a, std::size_t b) { return entries_[a]->last_used < entries_[b]->last_used; });
+  for (std::size_t i : held) {
+    if (sum <= budget_bytes) break;
+    sum -= entries_[i]->cloud->bytes();
+    entries_[i].reset();
+  }
 }
 
 }  // namespace bathyslam

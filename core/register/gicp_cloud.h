@@ -3,6 +3,7 @@
 // part in: its points (float, submap frame), a KD-tree over them, each point's covariance from
 // its k nearest neighbours regularised to a plane, and its horizontal bounding box (for the
 // overlap crop). PCL's GICP recomputes all of this for every pair; a submap is in 5-10 pairs.
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -34,6 +35,7 @@ struct GicpCloud {
   void ensure_normals(const std::vector<uint32_t>& indices, int threads = 1) const;
 
   static constexpr double kPlaneEpsilon = 1e-3;
+  std::size_t bytes() const;  // what it holds, roughly (points, normals, flags, tree)
   Eigen::Matrix3d covariance(std::size_t i) const {
     const Eigen::Vector3d n = normals[i].cast<double>();
     return Eigen::Matrix3d::Identity() - (1 - kPlaneEpsilon) * n * n.transpose();
@@ -46,17 +48,29 @@ struct GicpCloud {
 std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours);
 
 // Each submap's GicpCloud, built on first use (thread-safe: pairs registered in parallel may ask
-// for the same submap) and kept for the rest of the run.
+// for the same submap) and kept until `trim` drops it.
 class GicpCloudCache {
  public:
   GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours);
+  // Valid until the next `trim`.
   const GicpCloud& at(std::size_t submap);
+  // Drops the prepared submaps used longest ago (by `at`) until the rest hold at most
+  // `budget_bytes`; a survey's later pairs mostly reuse recent submaps (the line before), so
+  // this bounds a large survey's memory at little cost. Not while any `at` result is in use.
+  void trim(std::size_t budget_bytes);
+  std::size_t bytes() const;
 
  private:
+  struct Entry {
+    std::once_flag built;
+    std::shared_ptr<const GicpCloud> cloud;
+    uint64_t last_used = 0;
+  };
   const std::vector<Cloud::Ptr>& clouds_;
   int neighbours_;
-  std::vector<std::once_flag> built_;
-  std::vector<std::shared_ptr<const GicpCloud>> prepared_;
+  mutable std::mutex mutex_;
+  std::vector<std::shared_ptr<Entry>> entries_;
+  uint64_t uses_ = 0;
 };
 
 }  // namespace bathyslam

@@ -269,5 +269,23 @@ TEST(GicpCloudCache, PreparesEachSubmapOnce) {
   EXPECT_EQ(first.neighbours, 20);
 }
 
+TEST(GicpCloudCache, TrimDropsTheSubmapsUsedLongestAgo) {
+  const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
+  const std::vector<Cloud::Ptr> clouds{p.target, p.source, p.target};
+  GicpCloudCache cache(clouds, 20);
+  const std::size_t one = cache.at(0).bytes();
+  cache.at(1);
+  cache.at(2);
+  cache.at(0);  // now the most recent: 1 was used longest ago, then 2
+  const std::size_t all = cache.bytes();
+  cache.trim(all);
+  EXPECT_EQ(cache.bytes(), all) << "within the budget nothing goes";
+  cache.trim(all - 1);
+  EXPECT_EQ(cache.bytes(), all - prepare_gicp_cloud(*p.source, 20)->bytes()) << "submap 1 goes first";
+  cache.trim(one);  // then 2, used before 0
+  EXPECT_EQ(cache.bytes(), one);
+  EXPECT_EQ(cache.at(2).points.size(), p.target->size()) << "a dropped submap is prepared again on use";
+}
+
 }  // namespace
 }  // namespace bathyslam
