@@ -38,12 +38,9 @@ bool on_adjacent_lines(const SubmapSet& set, int a, int b, const CandidateConfig
 }
 
 Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose) {
-  Eigen::Vector2f lo(0, 0), hi(0, 0);
-  if (!submap.points.empty()) lo = hi = submap.points.front().head<2>();
-  for (const Eigen::Vector3f& p : submap.points) {
-    lo = lo.cwiseMin(p.head<2>());
-    hi = hi.cwiseMax(p.head<2>());
-  }
+  Eigen::AlignedBox2f box = submap.extent.isEmpty() ? extent_of(submap.points) : submap.extent;
+  if (box.isEmpty()) box = Eigen::AlignedBox2f(Eigen::Vector2f::Zero(), Eigen::Vector2f::Zero());  // no points
+  const Eigen::Vector2f lo = box.min(), hi = box.max();
   Footprint f;
   const Eigen::Vector2f local[4] = {{lo.x(), lo.y()}, {hi.x(), lo.y()}, {hi.x(), hi.y()}, {lo.x(), hi.y()}};
   for (int k = 0; k < 4; ++k) {

@@ -74,9 +74,16 @@ SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config) {
         submap.points.push_back((ping_to_submap * Eigen::Vector3d(b.along, b.across, b.down)).cast<float>());
       }
     }
+    submap.extent = extent_of(submap.points);
     set.submaps.push_back(std::move(submap));
   }
   return set;
+}
+
+Eigen::AlignedBox2f extent_of(const std::vector<Eigen::Vector3f>& points) {
+  Eigen::AlignedBox2f box;
+  for (const Eigen::Vector3f& p : points) box.extend(p.head<2>());
+  return box;
 }
 
 }  // namespace bathyslam

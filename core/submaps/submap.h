@@ -28,7 +28,14 @@ struct Submap {
   Eigen::Isometry3d dr_pose = Eigen::Isometry3d::Identity();  // submap frame -> map frame (DR)
   std::optional<Eigen::Isometry3d> reference_pose;            // the same from reference_nav
   std::vector<Eigen::Vector3f> points;                        // soundings, submap frame
+  // The rectangle `points` span horizontally (submap frame), kept by build_submaps so that the
+  // footprints of every batch's candidate search need not scan the points again; empty on a
+  // submap built by hand (footprint_of then scans them).
+  Eigen::AlignedBox2f extent;
 };
+
+// The rectangle `points` span horizontally (empty for no points).
+Eigen::AlignedBox2f extent_of(const std::vector<Eigen::Vector3f>& points);
 
 struct SubmapSet {
   LocalOrigin origin;              // map frame = projected CRS minus this
