@@ -37,13 +37,14 @@ Rejection unless_converged(const PairRegistration& reg) {
 }
 
 Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Isometry3d>& estimate,
-                         const RegistrationInputs& in, const PipelineConfig& config, const Plan& plan) {
+                         const RegistrationInputs& in, const PipelineConfig& config, const Plan& plan,
+                         const std::atomic<bool>* cancel) {
   const CandidatePair& pair = candidate.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
   const Cloud& target = *in.clouds[pair.target];
   const Cloud& source = *in.clouds[pair.source];
-  auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source); };
+  auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source, cancel); };
   PairRegistration reg;
   if (plan.features) {
     // RANSAC reproducible per pair, whatever thread or batch registers it.
@@ -87,7 +88,7 @@ std::vector<Constraint> register_pairs(const std::vector<Candidate>& candidates,
                                        const PipelineConfig& config, const Plan& plan, const std::atomic<bool>* cancel) {
   std::vector<Constraint> constraints(candidates.size());
   parallel_for(candidates.size(), plan.threads, cancel,
-               [&](std::size_t k) { constraints[k] = register_pair(candidates[k], estimate, inputs, config, plan); });
+               [&](std::size_t k) { constraints[k] = register_pair(candidates[k], estimate, inputs, config, plan, cancel); });
   return constraints;
 }
 

@@ -32,7 +32,8 @@ namespace {
 
 // register_direct with our GICP: the same crop, as indices into the prepared submaps.
 PairRegistration register_direct_prepared(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& guess,
-                                          const GicpConfig& gicp, double crop_margin_m, bool with_hessian) {
+                                          const GicpConfig& gicp, double crop_margin_m, bool with_hessian,
+                                          const std::atomic<bool>* cancel) {
   const GicpOverlap overlap = gicp_overlap(target, source, guess, crop_margin_m, gicp.threads);
   PairRegistration r;
   r.coarse = guess;
@@ -40,7 +41,8 @@ PairRegistration register_direct_prepared(const GicpCloud& target, const GicpClo
   r.registration.source_to_target = guess;
   const auto too_few = static_cast<std::size_t>(gicp.neighbours + 1);
   if (overlap.target_points < too_few || overlap.source_points.size() < too_few) return r;
-  PreparedRegistration reg = register_prepared(target, source, overlap, guess, gicp, with_hessian ? &r.anchor : nullptr);
+  PreparedRegistration reg =
+      register_prepared(target, source, overlap, guess, gicp, with_hessian ? &r.anchor : nullptr, cancel);
   r.registration = reg.registration;
   r.inlier_ratio = r.registration.quality.fitness;
   r.hessian = reg.hessian;
@@ -49,9 +51,10 @@ PairRegistration register_direct_prepared(const GicpCloud& target, const GicpClo
 
 }  // namespace
 
-PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source) {
+PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source,
+                           const std::atomic<bool>* cancel) {
   if (gicp.engine != 1) return {};
-  return {&cache.at(static_cast<std::size_t>(target)), &cache.at(static_cast<std::size_t>(source))};
+  return {&cache.at(static_cast<std::size_t>(target)), &cache.at(static_cast<std::size_t>(source)), cancel};
 }
 
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
@@ -60,7 +63,8 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
     std::shared_ptr<const GicpCloud> own_target, own_source;
     if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp.neighbours)).get();
     if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp.neighbours)).get();
-    return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian);
+    return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian,
+                                    prepared.cancel);
   }
   const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);
   const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);

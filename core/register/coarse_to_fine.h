@@ -1,6 +1,7 @@
 #pragma once
 // register (MCHS): the observability switch between direct GICP and feature-aided registration
 // (TSD keypoints -> matching -> adaptive RANSAC -> GICP refinement), per submap pair.
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -88,11 +89,14 @@ struct PairRegistration {
   GicpHessian hessian;
 };
 
-// The two submaps prepared for our GICP (GicpConfig::engine 1), from a GicpCloudCache; null:
-// prepared on the fly from the clouds (costs what the cache saves). PCL's GICP ignores them.
+// What our GICP (GicpConfig::engine 1) registers with: the two submaps prepared, from a
+// GicpCloudCache (null: prepared on the fly from the clouds, which costs what the cache saves),
+// and the job's cancel flag, which ends a registration within an iteration (null: none). PCL's
+// GICP ignores them.
 struct PreparedPair {
   const GicpCloud* target = nullptr;
   const GicpCloud* source = nullptr;
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // The coarse half: the switch's decision and, on the feature-aided path, RANSAC's estimate, so
@@ -122,7 +126,8 @@ PairRegistration register_from_start(const CoarseStart& coarse, const Cloud& tar
 PairRegistration unregistered(const CoarseStart& coarse, const Eigen::Isometry3d& guess);
 
 // The pair's submaps from `cache` when our GICP registers (gicp.engine 1), none for PCL's.
-PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source);
+PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source,
+                           const std::atomic<bool>* cancel = nullptr);
 
 // Both halves. `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC
 // reproducible per pair.

@@ -111,7 +111,8 @@ Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& over
 GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
                                   const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
-                                  double min_observed_share, double max_turn_rad, int threads) {
+                                  double min_observed_share, double max_turn_rad, int threads,
+                                  const std::atomic<bool>* cancel) {
   const Eigen::Translation3d to_pivot(-pivot), from_source_pivot(source_pivot);
   auto centred = [&](const Eigen::Isometry3d& t) { return Eigen::Isometry3d(to_pivot * t * from_source_pivot); };
   // Float soundings cannot tell apart poses closer than their resolution (a float 100 m from
@@ -127,6 +128,7 @@ GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& sour
   double last_cost = INFINITY;         // mean cost per correspondence at the last point kept
   double lever_m = 0;                  // rotations in metres at the overlap, for Anderson's mix
   while (pass.iterations < max_iterations) {
+    if (cancel != nullptr && cancel->load()) return pass;  // the job is stopping: its results go
     // As PCL: associate, then minimise over those correspondences (PCL: BFGS, at most 20 inner
     // iterations; here one Gauss–Newton step, as AA-ICP takes: more steps on the same
     // correspondences cost a linearisation each and, with Anderson's mix, no iterations), then
@@ -183,7 +185,7 @@ GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& sour
 
 PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
                                        const Eigen::Isometry3d& guess, const GicpConfig& config,
-                                       const Eigen::Vector3d* hessian_anchor) {
+                                       const Eigen::Vector3d* hessian_anchor, const std::atomic<bool>* cancel) {
   // As the wrapper: about the overlaps' centroids, where yaw and translation are not the same
   // motion (gicp.h, about_centroid).
   const Eigen::Vector3d pivot = config.about_centroid ? target_centroid(target, overlap) : Eigen::Vector3d::Zero();
@@ -192,13 +194,13 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
   Associator at_gate(target, source, overlap, config.max_correspondence_m);
   const double max_turn_rad = config.max_turn_deg * M_PI / 180;
   GaussNewtonPass pass = gauss_newton_gicp(target, source, at_gate, guess, pivot, source_pivot, config.convergence,
-                                           config.max_iterations, config.min_observed_share, max_turn_rad, threads);
+                                           config.max_iterations, config.min_observed_share, max_turn_rad, threads, cancel);
   if (config.refine_correspondence_m > 0) {
     Associator at_refine_gate(target, source, overlap, config.refine_correspondence_m);
     const GaussNewtonPass refined =
         gauss_newton_gicp(target, source, at_refine_gate, pass.source_to_target, pivot, source_pivot,
                           config.refine_convergence, config.max_iterations, config.min_observed_share,
-                          max_turn_rad, threads);
+                          max_turn_rad, threads, cancel);
     pass = {refined.source_to_target, pass.converged && refined.converged, pass.iterations + refined.iterations};
   }
   PreparedRegistration out;

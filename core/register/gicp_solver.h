@@ -3,6 +3,8 @@
 // re-associating every iteration, with PCL's GICP's parameters and convergence rule, on submaps
 // prepared once (gicp_cloud.h). Returns what register_gicp (the PCL wrapper) returns and, if
 // asked, the cost's Hessian at the answer.
+#include <atomic>
+
 #include <Eigen/Geometry>
 
 #include "core/register/gicp.h"
@@ -28,11 +30,12 @@ struct GaussNewtonPass {
 // rule compares the transform between the frames centred there and at `source_pivot` (source
 // frame), which is what PCL sees when the wrapper shifts the clouds (about_centroid). As in PCL,
 // reaching `max_iterations` counts as converged; too few correspondences or a singular system
-// does not, nor does turning by more than `max_turn_rad` from `start`.
+// does not, nor does turning by more than `max_turn_rad` from `start`, nor a `cancel` set.
 GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
                                   const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
-                                  double min_observed_share, double max_turn_rad, int threads);
+                                  double min_observed_share, double max_turn_rad, int threads,
+                                  const std::atomic<bool>* cancel = nullptr);
 
 struct PreparedRegistration {
   Registration registration;
@@ -45,7 +48,8 @@ struct PreparedRegistration {
 // at max_correspondence_m) on the overlap `overlap` of two prepared submaps.
 PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
                                        const Eigen::Isometry3d& guess, const GicpConfig& config,
-                                       const Eigen::Vector3d* hessian_anchor = nullptr);
+                                       const Eigen::Vector3d* hessian_anchor = nullptr,
+                                       const std::atomic<bool>* cancel = nullptr);
 
 // Mean of the overlap's source points, source frame (double sum).
 Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& overlap);

@@ -147,6 +147,21 @@ TEST(OwnGicp, APassThatTurnsBeyondTheLimitDoesNotConverge) {
   EXPECT_FALSE(beyond.registration.quality.converged);
 }
 
+// A job being stopped ends its registrations within an iteration: not converged, at the guess.
+TEST(OwnGicp, ACancelledRegistrationStopsAtOnce) {
+  const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
+  const auto target = prepare_gicp_cloud(*p.target, 20), source = prepare_gicp_cloud(*p.source, 20);
+  std::atomic<bool> cancel = false;
+  const PairRegistration running =
+      register_direct(*p.target, *p.source, off(p.truth), ours(), 1.0, false, {target.get(), source.get(), &cancel});
+  EXPECT_TRUE(running.registration.quality.converged);
+  cancel = true;
+  const PairRegistration stopped =
+      register_direct(*p.target, *p.source, off(p.truth), ours(), 1.0, false, {target.get(), source.get(), &cancel});
+  EXPECT_FALSE(stopped.registration.quality.converged);
+  EXPECT_TRUE(stopped.registration.source_to_target.isApprox(off(p.truth)));
+}
+
 TEST(OwnGicp, AgreesWithPclOnAnAdjacentLinePairOfASimulatedSurvey) {
   const SubmapSet set = true_small_submaps(4);
   const std::vector<Eigen::Isometry3d> poses = poses_of(set);
