@@ -54,6 +54,7 @@ Input* g_input = nullptr;
 struct Outcome {
   std::vector<double> seconds, cpu_seconds, translation_m, yaw_deg;  // per pair
   double prepare_seconds = 0, prepare_cpu_seconds = 0;               // ours: the trees of all submaps used
+  double all_pairs_seconds = 0, all_pairs_cpu_seconds = 0;           // pairs in parallel: the whole set, trees included
 };
 
 struct Stopwatch {
@@ -79,12 +80,16 @@ std::string load() {
 
 // Error of a registration at the overlap (its anchor), where the pipeline's edges compare it,
 // and in yaw.
-void record(Outcome& o, const Pair& pair, const PairRegistration& r, const Stopwatch& watch) {
-  o.seconds.push_back(watch.wall_seconds());
-  o.cpu_seconds.push_back(watch.cpu_seconds());
+void record_error(Outcome& o, const Pair& pair, const PairRegistration& r) {
   o.translation_m.push_back((r.registration.source_to_target * r.anchor - pair.truth * r.anchor).norm());
   const Eigen::Matrix3d delta = pair.truth.rotation().transpose() * r.registration.source_to_target.rotation();
   o.yaw_deg.push_back(std::abs(std::atan2(delta(1, 0), delta(0, 0))) * 180 / M_PI);
+}
+
+void record(Outcome& o, const Pair& pair, const PairRegistration& r, const Stopwatch& watch) {
+  o.seconds.push_back(watch.wall_seconds());
+  o.cpu_seconds.push_back(watch.cpu_seconds());
+  record_error(o, pair, r);
 }
 
 void counters(benchmark::State& state, const Outcome& o) {
@@ -168,16 +173,13 @@ void BM_OwnGicpPairsInParallel(benchmark::State& state) {
       results[k] = register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source], pair.coarse.start,
                                    gicp, g_input->crop_margin_m, false, {&cache.at(pair.target), &cache.at(pair.source)});
     });
-    o.prepare_seconds = watch.wall_seconds();  // all of it: trees, normals and registrations
-    o.prepare_cpu_seconds = watch.cpu_seconds();
-    for (std::size_t k = 0; k < results.size(); ++k) {
-      const Stopwatch none;
-      record(o, g_input->pairs[k], results[k], none);
-    }
+    o.all_pairs_seconds = watch.wall_seconds();
+    o.all_pairs_cpu_seconds = watch.cpu_seconds();
+    for (std::size_t k = 0; k < results.size(); ++k) record_error(o, g_input->pairs[k], results[k]);
   }
   state.counters["pairs"] = static_cast<double>(o.translation_m.size());
-  state.counters["all_pairs_wall_s"] = o.prepare_seconds;
-  state.counters["all_pairs_cpu_s"] = o.prepare_cpu_seconds;
+  state.counters["all_pairs_wall_s"] = o.all_pairs_seconds;
+  state.counters["all_pairs_cpu_s"] = o.all_pairs_cpu_seconds;
   state.counters["t_err_p50_m"] = percentile(o.translation_m, 0.5);
   g_outcomes["pairs_in_parallel_" + std::to_string(threads)] = o;
 }
@@ -261,8 +263,8 @@ void summary() {
   const auto serial = g_outcomes.find("pairs_in_parallel_1"), parallel = g_outcomes.find("pairs_in_parallel_2");
   if (serial != g_outcomes.end() && parallel != g_outcomes.end()) {
     std::printf("ours, pairs spread over 1 -> 2 threads (as the pipeline), wall clock of all pairs and trees: "
-                "%.2f s -> %.2f s, %.2fx\n", serial->second.prepare_seconds, parallel->second.prepare_seconds,
-                serial->second.prepare_seconds / parallel->second.prepare_seconds);
+                "%.2f s -> %.2f s, %.2fx\n", serial->second.all_pairs_seconds, parallel->second.all_pairs_seconds,
+                serial->second.all_pairs_seconds / parallel->second.all_pairs_seconds);
   }
   const auto one = g_outcomes.find("ours_1"), two = g_outcomes.find("ours_2");
   if (one != g_outcomes.end() && two != g_outcomes.end()) {

@@ -124,10 +124,10 @@ CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeat
   return c;
 }
 
-PairRegistration register_from_start(const CoarseStart& c, const Cloud& target, const Cloud& source,
-                                     const SubmapFeatures& target_features, const SubmapFeatures& source_features,
-                                     const CoarseToFineConfig& config, bool with_hessian, PreparedPair prepared) {
-  PairRegistration r = register_direct(target, source, c.start, c.gicp, config.crop_margin_m, with_hessian, prepared);
+namespace {
+
+// `r` with the switch's decision and, on the feature-aided path, RANSAC's figures.
+PairRegistration with_switch_decision(PairRegistration r, const CoarseStart& c) {
   r.path = c.path;
   r.why = c.why;
   r.feature_density = c.feature_density;
@@ -138,19 +138,25 @@ PairRegistration register_from_start(const CoarseStart& c, const Cloud& target, 
     r.competitor_separation_m = c.competitor_separation_m;
     r.inlier_ratio = c.ransac_inlier_ratio;
   }
+  return r;
+}
+
+}  // namespace
+
+PairRegistration register_from_start(const CoarseStart& c, const Cloud& target, const Cloud& source,
+                                     const SubmapFeatures& target_features, const SubmapFeatures& source_features,
+                                     const CoarseToFineConfig& config, bool with_hessian, PreparedPair prepared) {
+  PairRegistration r = with_switch_decision(
+      register_direct(target, source, c.start, c.gicp, config.crop_margin_m, with_hessian, prepared), c);
   r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
   return r;
 }
 
 PairRegistration unregistered(const CoarseStart& c, const Eigen::Isometry3d& guess) {
   PairRegistration r;
-  r.path = c.path;
-  r.why = c.why;
-  r.feature_density = c.feature_density;
-  r.matches = c.matches;
   r.coarse = guess;
   r.registration.source_to_target = guess;
-  return r;
+  return with_switch_decision(r, c);
 }
 
 PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
