@@ -8,18 +8,39 @@
 namespace bathyslam {
 namespace {
 
-// Target elevation (up) at a target-frame position, bilinear over valid cells; NaN off the grid
-// or next to a hole.
-float elevation_at(const TerrainGrid& grid, double x, double y) {
-  const double u = (x - grid.origin.x()) / grid.cell_m, v = (y - grid.origin.y()) / grid.cell_m;
-  const int c = static_cast<int>(std::floor(u)), r = static_cast<int>(std::floor(v));
+// Where a moved source cell falls on the target grid: the target cell below-left of it and the
+// bilinear weights within. An offset of whole target cells moves the cell and keeps the weights,
+// so the probe's offsets (a step of 1 m over 0.5 m cells) reuse one set of samples.
+struct GridSample {
+  int col = 0, row = 0;
+  float fu = 0, fv = 0;
+  double down = 0;  // the source's depth there (target frame, z down)
+};
+
+std::vector<GridSample> samples_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& moved,
+                                   const Eigen::Vector2d& offset) {
+  std::vector<GridSample> samples;
+  samples.reserve(moved.size());
+  for (const Eigen::Vector3d& p : moved) {
+    const double u = (p.x() + offset.x() - target.origin.x()) / target.cell_m;
+    const double v = (p.y() + offset.y() - target.origin.y()) / target.cell_m;
+    const double c = std::floor(u), r = std::floor(v);
+    samples.push_back({static_cast<int>(c), static_cast<int>(r), static_cast<float>(u - c), static_cast<float>(v - r), p.z()});
+  }
+  return samples;
+}
+
+// Target elevation (up) at a sample moved by (dc, dr) cells, bilinear over valid cells; NaN off
+// the grid or next to a hole.
+float elevation_at(const TerrainGrid& grid, const GridSample& s, int dc, int dr) {
+  const int c = s.col + dc, r = s.row + dr;
   if (c < 0 || r < 0 || c + 1 >= grid.cols() || r + 1 >= grid.rows()) return std::numeric_limits<float>::quiet_NaN();
   const uint8_t* valid0 = grid.valid.ptr<uint8_t>(r);
   const uint8_t* valid1 = grid.valid.ptr<uint8_t>(r + 1);
   if (!valid0[c] || !valid0[c + 1] || !valid1[c] || !valid1[c + 1]) return std::numeric_limits<float>::quiet_NaN();
   const float* row0 = grid.elevation.ptr<float>(r);
   const float* row1 = grid.elevation.ptr<float>(r + 1);
-  const float fu = static_cast<float>(u - c), fv = static_cast<float>(v - r);
+  const float fu = s.fu, fv = s.fv;
   return (1 - fv) * ((1 - fu) * row0[c] + fu * row0[c + 1]) + fv * ((1 - fu) * row1[c] + fu * row1[c + 1]);
 }
 
@@ -28,15 +49,15 @@ struct Cost {
   int cells = 0;
 };
 
-// Mean squared difference between the moved source cells and the target at `offset`, their
+// Mean squared difference between the samples moved by (dc, dr) cells and the target, their
 // mean difference removed (a depth bias is not a misalignment).
-Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& moved, const Eigen::Vector2d& offset) {
+Cost cost_at(const TerrainGrid& target, const std::vector<GridSample>& samples, int dc, int dr) {
   double sum = 0, sum_sq = 0;
   int n = 0;
-  for (const Eigen::Vector3d& p : moved) {
-    const float up = elevation_at(target, p.x() + offset.x(), p.y() + offset.y());
+  for (const GridSample& s : samples) {
+    const float up = elevation_at(target, s, dc, dr);
     if (std::isnan(up)) continue;
-    const double d = -p.z() - up;
+    const double d = -s.down - up;
     sum += d;
     sum_sq += d * d;
     ++n;
@@ -45,6 +66,18 @@ Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& move
   c.cells = n;
   if (n > 0) c.mean_square = std::max(0.0, sum_sq / n - (sum / n) * (sum / n));
   return c;
+}
+
+// The cost at a horizontal offset in metres: by whole cells from `at_answer` when the offset is
+// a whole number of cells, else from samples taken there.
+Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& moved,
+             const std::vector<GridSample>& at_answer, const Eigen::Vector2d& offset) {
+  const Eigen::Vector2d cells = offset / target.cell_m;
+  const Eigen::Vector2d whole = cells.array().round();
+  if ((cells - whole).cwiseAbs().maxCoeff() < 1e-9) {
+    return cost_at(target, at_answer, static_cast<int>(whole.x()), static_cast<int>(whole.y()));
+  }
+  return cost_at(target, samples_at(target, moved, offset), 0, 0);
 }
 
 }  // namespace
@@ -67,10 +100,14 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
   }
   // Only the cells that overlap at the answer take part, so every offset compares the same ground.
   std::vector<Eigen::Vector3d> overlap;
-  for (const Eigen::Vector3d& p : moved) {
-    if (!std::isnan(elevation_at(target, p.x(), p.y()))) overlap.push_back(p);
+  std::vector<GridSample> overlap_samples;
+  const std::vector<GridSample> samples = samples_at(target, moved, Eigen::Vector2d::Zero());
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    if (std::isnan(elevation_at(target, samples[i], 0, 0))) continue;
+    overlap.push_back(moved[i]);
+    overlap_samples.push_back(samples[i]);
   }
-  const Cost at_answer = cost_at(target, overlap, Eigen::Vector2d::Zero());
+  const Cost at_answer = cost_at(target, overlap_samples, 0, 0);
   if (at_answer.cells < 50) return u;
 
   const int reach = static_cast<int>(std::floor(config.search_radius_m / config.step_m));
@@ -82,7 +119,7 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
     for (int i = -reach; i <= reach; ++i) {
       const Eigen::Vector2d offset(i * config.step_m, j * config.step_m);
       if (offset.norm() > config.search_radius_m) continue;
-      const Cost c = cost_at(target, overlap, offset);
+      const Cost c = cost_at(target, overlap, overlap_samples, offset);
       if (c.cells < min_cells) continue;
       cost[static_cast<std::size_t>(j + reach) * side + (i + reach)] = c.mean_square;
       compared.push_back(c.mean_square);
