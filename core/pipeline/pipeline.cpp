@@ -77,7 +77,12 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
     if (plan.consistency) select_consistent_registrations(r.constraints, inputs.dr, r.dr_poses, config.robustness.pcm);
-    if (end < n && !candidates.empty()) estimate = solve(estimate, r.constraints, config.graph).poses;
+    if (end < n && !candidates.empty()) {
+      const auto start = std::chrono::steady_clock::now();
+      estimate = solve(estimate, r.constraints, config.graph).poses;
+      r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      ++r.batch_solves;
+    }
     if (progress) progress("register", static_cast<double>(end) / n);
   }
 }

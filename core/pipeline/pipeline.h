@@ -46,6 +46,10 @@ struct PipelineResult {
   std::vector<double> dr_aligned_trajectory_errors, aligned_trajectory_errors;
   ConsistencyReport dr_consistency, consistency;
   std::vector<StageTiming> timings;
+  // Within the register stage: the graph solves between its batches (how a growing survey's
+  // graph costs, in the report's "graph" section).
+  int batch_solves = 0;
+  double batch_solve_seconds = 0;
 };
 
 using ProgressFn = std::function<void(std::string_view stage, double fraction)>;

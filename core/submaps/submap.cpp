@@ -68,6 +68,11 @@ SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config) {
     }
     // georef: beams -> map (by their ping's pose) -> submap frame.
     const Eigen::Isometry3d map_to_submap = submap.dr_pose.inverse();
+    // Exactly as many as the beams: grown by doubling, a submap's points could take up to twice
+    // the memory they use, and they are most of a survey's.
+    std::size_t beams = 0;
+    for (std::size_t k = first; k <= last; ++k) beams += survey.pings[posed[k].ping].beam_count;
+    submap.points.reserve(beams);
     for (std::size_t k = first; k <= last; ++k) {
       const Eigen::Isometry3d ping_to_submap = map_to_submap * posed[k].pose;
       for (const Beam& b : survey.beams_of(survey.pings[posed[k].ping])) {
