@@ -63,20 +63,23 @@ double overlap_area_m2(const Footprint& a, const Footprint& b) {
 
 namespace {
 
-// Every pair (earlier, later) that `wanted` admits and whose footprints overlap by at least
-// `min_fraction` of the smaller one, found through a grid index over the footprints.
+// Every pair (earlier, later) with the later in `later` that `wanted` admits and whose
+// footprints overlap by at least `min_fraction` of the smaller one, found through a grid index
+// over the footprints.
 template <typename Wanted>
 std::vector<CandidatePair> overlapping_pairs(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                             double min_fraction, Wanted&& wanted) {
+                                             double min_fraction, LaterSubmaps later, Wanted&& wanted) {
+  const int end = std::min(later.end, static_cast<int>(set.submaps.size()));
   std::vector<Footprint> footprints;
   std::unordered_map<int64_t, std::vector<int>> grid;
-  for (const Submap& s : set.submaps) {
-    footprints.push_back(footprint_of(s, poses[s.index]));
-    for (int64_t cell : cells_of(footprints.back())) grid[cell].push_back(s.index);
+  for (int i = 0; i < end; ++i) {
+    footprints.push_back(footprint_of(set.submaps[i], poses[i]));
+    for (int64_t cell : cells_of(footprints.back())) grid[cell].push_back(i);
   }
   std::vector<CandidatePair> pairs;
   std::vector<int> near;
-  for (const Submap& s : set.submaps) {
+  for (int index = std::max(later.begin, 0); index < end; ++index) {
+    const Submap& s = set.submaps[index];
     near.clear();
     for (int64_t cell : cells_of(footprints[s.index])) {
       const auto it = grid.find(cell);
@@ -102,14 +105,14 @@ std::vector<CandidatePair> overlapping_pairs(const SubmapSet& set, const std::ve
 
 std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
                                                     const std::vector<Eigen::Isometry3d>& poses,
-                                                    const CandidateConfig& config) {
-  return overlapping_pairs(set, poses, config.min_overlap_fraction,
+                                                    const CandidateConfig& config, LaterSubmaps later) {
+  return overlapping_pairs(set, poses, config.min_overlap_fraction, later,
                            [&](int a, int b) { return on_adjacent_lines(set, a, b, config); });
 }
 
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                           const CandidateConfig& config) {
-  return overlapping_pairs(set, poses, config.min_overlap_fraction, [&](int a, int b) {
+                                           const CandidateConfig& config, LaterSubmaps later) {
+  return overlapping_pairs(set, poses, config.min_overlap_fraction, later, [&](int a, int b) {
     return std::abs(a - b) >= config.loop_min_submap_gap && !on_adjacent_lines(set, a, b, config);
   });
 }

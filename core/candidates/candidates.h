@@ -1,6 +1,7 @@
 #pragma once
 // candidates: pairs of submaps worth registering, from their dead-reckoning footprints.
 #include <array>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -48,16 +49,23 @@ struct CandidatePair {
   double overlap_fraction = 0;
 };
 
+// The submaps a search takes as the later of a pair: all, or one batch's [begin, end). A
+// batch's search then costs the batch and not the survey so far (`large`: 315 batches).
+struct LaterSubmaps {
+  int begin = 0;
+  int end = std::numeric_limits<int>::max();
+};
+
 // Pairs on K-adjacent parallel lines whose footprints (at `poses`) overlap enough. A grid index
 // over the footprints keeps this near-linear in the number of submaps.
 std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
                                                     const std::vector<Eigen::Isometry3d>& poses,
-                                                    const CandidateConfig& config = {});
+                                                    const CandidateConfig& config = {}, LaterSubmaps later = {});
 
 // Loop-closure candidates: pairs whose footprints (at `poses`) overlap enough but that are not
 // on K-adjacent parallel lines (check lines crossing the lawnmower, revisits, turns), and are
 // far enough apart in time.
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                           const CandidateConfig& config = {});
+                                           const CandidateConfig& config = {}, LaterSubmaps later = {});
 
 }  // namespace bathyslam

@@ -76,10 +76,10 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
 }
 
 GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
-                    const GraphConfig& config) {
+                    const GraphConfig& config, int nodes) {
   std::vector<PoseGraphEdge> edges;
   for (const Constraint& c : constraints) {
-    if (c.in_graph()) edges.push_back(edge_of(c));
+    if (c.in_graph() && c.from < nodes && c.to < nodes) edges.push_back(edge_of(c));
   }
   return optimize_pose_graph(initial, edges, config);
 }

@@ -2,6 +2,7 @@
 // The back end's defences against wrong edges (issue 14): which registrations the graph may
 // believe, and the safety net that checks the solution against dead reckoning's noise before
 // it is published.
+#include <limits>
 #include <vector>
 
 #include "core/graph/dr_noise.h"
@@ -22,9 +23,10 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
                                      const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config);
 
 // The graph of the constraints in it, solved from `initial` (dead reckoning, or a batch's
-// estimate).
+// estimate). With `nodes`, only the constraints among the first `nodes` poses; the others keep
+// `initial`.
 GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
-                    const GraphConfig& config);
+                    const GraphConfig& config, int nodes = std::numeric_limits<int>::max());
 
 // Solves, then tests the solution (graph_check.h): while a line's odometry residuals fail the
 // chi-square test or a registration pulls beyond `max_pull_sigma`, the hardest-pulling

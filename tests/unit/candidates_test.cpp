@@ -57,6 +57,30 @@ TEST(Candidates, TheGridIndexFindsExactlyWhatComparingAllPairsFinds) {
   EXPECT_EQ(pair_set(adjacent_line_candidates(set, poses, config)), brute_force);
 }
 
+// A batch's search finds exactly the whole search's pairs whose later submap is in the batch.
+TEST(Candidates, ABatchFindsTheWholeSearchsPairsEndingInIt) {
+  const SubmapSet& set = true_submaps();
+  const auto poses = poses_of(set);
+  CandidateConfig config;
+  config.loop_min_submap_gap = 2;
+  const int n = static_cast<int>(set.submaps.size());
+  const PairSet adjacent = pair_set(adjacent_line_candidates(set, poses, config));
+  const PairSet loops = pair_set(loop_candidates(set, poses, config));
+  ASSERT_GT(adjacent.size(), 10u);
+  ASSERT_GT(loops.size(), 0u);
+  PairSet adjacent_by_batch, loops_by_batch;
+  for (int begin = 0; begin < n; begin += 7) {
+    const LaterSubmaps batch{begin, std::min(n, begin + 7)};
+    for (const CandidatePair& p : adjacent_line_candidates(set, poses, config, batch)) {
+      EXPECT_TRUE(p.source >= batch.begin && p.source < batch.end);
+      adjacent_by_batch.insert({p.target, p.source});
+    }
+    for (const CandidatePair& p : loop_candidates(set, poses, config, batch)) loops_by_batch.insert({p.target, p.source});
+  }
+  EXPECT_EQ(adjacent_by_batch, adjacent);
+  EXPECT_EQ(loops_by_batch, loops);
+}
+
 // Against where the soundings really are: every pair of submaps on adjacent lines whose
 // soundings share a good part of their cells is a candidate, and no candidate is a pair whose
 // soundings share (next to) nothing.
