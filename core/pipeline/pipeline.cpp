@@ -135,8 +135,8 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
     const DrNoiseModel dr(r.dr_poses, config.graph);
     GicpCloudCache prepared(clouds, config.registration.gicp.neighbours);  // built on first use
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
-    clock.done("register");
-  }
+  }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
+  if (plan.registration) clock.done("register");
 
   report("graph", 0);
   if (plan.safety_net) {
