@@ -59,6 +59,32 @@ TEST(Uniqueness, MoundsFitOnlyWhereTheyAre) {
   EXPECT_GT(u.distinctness(), 25.0);
 }
 
+// Steps of whole cells reuse one set of bilinear samples, shifted; any other step samples at
+// each offset. Both must see the same seabed: a step a micrometre off whole cells takes the
+// second way to (nearly) the same offsets.
+TEST(Uniqueness, WholeCellStepsCostWhatSamplingEachOffsetCosts) {
+  const SyntheticTerrain mounds = SyntheticTerrain::with_mounds(5);
+  auto elevation = [&](const Eigen::Vector2d& p) { return mounds.elevation(p); };
+  const Eigen::Isometry3d target_frame = planar_pose(0, 0, 0), source_frame = planar_pose(10, 2, 7);
+  const TerrainGrid target = grid_of(elevation, target_frame, 0, 1), source = grid_of(elevation, source_frame, 10, 2);
+  const Eigen::Isometry3d answer = planar_pose(0.3, -0.2, 1) * target_frame.inverse() * source_frame;
+  // Radii between lattice points, so that both probes compare the same set of offsets.
+  UniquenessConfig whole;
+  whole.search_radius_m = 23.5;
+  whole.local_radius_m = 5.5;
+  whole.exclusion_m = 3.2;
+  UniquenessConfig sampled = whole;
+  sampled.step_m = whole.step_m + 1e-6;
+  const Uniqueness a = probe_uniqueness(target, source, answer, whole);
+  const Uniqueness b = probe_uniqueness(target, source, answer, sampled);
+  ASSERT_TRUE(a.probed && b.probed);
+  EXPECT_NEAR(a.cost_at_answer_m2, b.cost_at_answer_m2, 1e-9);
+  EXPECT_NEAR(a.typical_cost_m2, b.typical_cost_m2, 1e-3 * a.typical_cost_m2);
+  EXPECT_NEAR(a.local_cost_m2, b.local_cost_m2, 1e-3 * a.local_cost_m2);
+  EXPECT_NEAR(a.alternative_cost_m2, b.alternative_cost_m2, 1e-3 * a.alternative_cost_m2);
+  EXPECT_LT((a.alternative_offset_m - b.alternative_offset_m).norm(), 1e-3);
+}
+
 TEST(Uniqueness, AFlatBottomHasNoUniqueAnswer) {
   const Uniqueness u = probe_at_truth([](const Eigen::Vector2d&) { return -10.0; });
   ASSERT_TRUE(u.probed);
