@@ -31,21 +31,6 @@ Side side_of(const std::vector<Keypoint>& keypoints) {
   return side;
 }
 
-// descriptor_mse(a, b) if it is below `bound`, else some value at or above it. The sum of squares
-// only grows, so it stops once past the bound: most keypoints in the gate score far worse than
-// the best two so far, and scoring them was a tenth of a `lake` job.
-double descriptor_mse_below(const Eigen::VectorXf& a, const Eigen::VectorXf& b, double bound) {
-  const Eigen::Index n = a.size();
-  const double limit = bound * static_cast<double>(n);
-  double sum = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double d = a[i] - b[i];
-    sum += d * d;
-    if (i % 16 == 15 && sum >= limit) break;
-  }
-  return sum / static_cast<double>(n);
-}
-
 // For each query keypoint, its best match among the indexed keypoints within the gate, if it
 // passes correlation and the ratio test.
 std::vector<BestMatch> one_way(const Side& queries, const Side& indexed, const MatchConfig& config) {
@@ -60,7 +45,7 @@ std::vector<BestMatch> one_way(const Side& queries, const Side& indexed, const M
     tree.within(q, config.max_distance_m, near, sq_distances);
     double second = std::numeric_limits<double>::infinity();
     for (int j : near) {
-      const double mse = descriptor_mse_below(queries.keypoints[i].descriptor, indexed.keypoints[j].descriptor, second);
+      const double mse = descriptor_mse(queries.keypoints[i].descriptor, indexed.keypoints[j].descriptor, second);
       // Neither the best nor the second best can change (best <= second), so the costlier
       // correlation test need not run.
       if (mse >= second) continue;

@@ -79,7 +79,7 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     if (end < n && !candidates.empty()) {
       // The submaps registered so far: the later ones would hang off them by odometry alone and
       // move along without bending anything, so the solve grows with the survey mapped so far
-      // instead of being the whole survey's 315 times over (`large`: 119 of 462 s).
+      // instead of being the whole survey's 290 times over (`large`: 119 of 462 s).
       const auto start = std::chrono::steady_clock::now();
       estimate = solve(estimate, r.constraints, config.graph, end).poses;
       r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

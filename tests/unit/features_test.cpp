@@ -77,5 +77,22 @@ TEST(TsdKeypoints, DescriptorMatchesItsOwnPatchRotatedBy37Degrees) {
   EXPECT_GE(correlated, 0.9 * compared) << correlated << " of " << compared << " correlate at 0.95 or more";
 }
 
+// The match score is the mean squared difference; given a bound below it, the score stops at
+// or above the bound (so a matcher comparing against its second best decides the same), and a
+// bound above it changes nothing.
+TEST(TsdKeypoints, DescriptorMseStopsOnlyPastItsBound) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  Eigen::VectorXf a(121), b(121);
+  for (int i = 0; i < 121; ++i) a[i] = noise(rng), b[i] = noise(rng);
+  double exact = 0;
+  for (int i = 0; i < 121; ++i) exact += double(a[i] - b[i]) * double(a[i] - b[i]);
+  exact /= 121;
+  EXPECT_NEAR(descriptor_mse(a, b), exact, 1e-12);
+  EXPECT_NEAR(descriptor_mse(a, b, 2 * exact), exact, 1e-12);
+  EXPECT_GE(descriptor_mse(a, b, 0.5 * exact), 0.5 * exact);
+  EXPECT_LT(descriptor_mse(a, b, 0.05 * exact), exact) << "stopped early";
+}
+
 }  // namespace
 }  // namespace bathyslam
