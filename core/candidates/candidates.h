@@ -50,7 +50,7 @@ struct CandidatePair {
 };
 
 // The submaps a search takes as the later of a pair: all, or one batch's [begin, end). A
-// batch's search then costs the batch and not the survey so far (`large`: 315 batches).
+// batch's search then costs the batch and not the survey so far (`large`: 316 batches).
 struct LaterSubmaps {
   int begin = 0;
   int end = std::numeric_limits<int>::max();
