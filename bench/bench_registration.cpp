@@ -10,8 +10,8 @@
 // axis, 0.2 m in depth, 1.5 deg of yaw, standard deviations); the mchs switch then picks the path
 // (direct from the guess, or feature-aided from RANSAC's estimate) exactly as the pipeline does,
 // and only the GICP step that follows is timed, with the settings that path uses. Ours registers
-// on submaps prepared once (gicp_cloud.h): their trees are timed on their own and reported as a
-// share per pair ("amortised"); the normals, computed on first use, fall in the pairs' times.
+// on submaps prepared once (gicp_cloud.h): their column grids are timed on their own and reported
+// as a share per pair ("amortised"); the normals, computed on first use, fall in the pairs' times.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -53,8 +53,8 @@ Input* g_input = nullptr;
 // wall clock measures the other jobs as much as the registration, CPU time does not.
 struct Outcome {
   std::vector<double> seconds, cpu_seconds, translation_m, yaw_deg;  // per pair
-  double prepare_seconds = 0, prepare_cpu_seconds = 0;               // ours: the trees of all submaps used
-  double all_pairs_seconds = 0, all_pairs_cpu_seconds = 0;           // pairs in parallel: the whole set, trees included
+  double prepare_seconds = 0, prepare_cpu_seconds = 0;               // ours: the grids of all submaps used
+  double all_pairs_seconds = 0, all_pairs_cpu_seconds = 0;           // pairs in parallel: the whole set, grids included
 };
 
 struct Stopwatch {
@@ -246,23 +246,23 @@ void summary() {
   for (const Pair& p : g_input->pairs) ++kinds[p.type + " " + to_string(p.coarse.path)];
   std::printf("\npairs:");
   for (const auto& [kind, n] : kinds) std::printf("  %s %d", kind.c_str(), n);
-  std::printf("\n%-8s %8s %8s %8s %10s %8s %9s %9s %9s %9s %9s\n", "engine", "cpu p50", "cpu p90", "+trees", "x PCL p50",
+  std::printf("\n%-8s %8s %8s %8s %10s %8s %9s %9s %9s %9s %9s\n", "engine", "cpu p50", "cpu p90", "+grids", "x PCL p50",
               "wall p50", "t p50 m", "t p90 m", "yaw p50", "yaw p90", "sum cpu");
   const double pcl_p50 = percentile(pcl->second.cpu_seconds, 0.5);
   for (const auto& [name, o] : g_outcomes) {
     if (name.rfind("pairs_in_parallel", 0) == 0) continue;  // one wall clock, no per-pair times
-    const double trees = o.seconds.empty() ? 0 : o.prepare_cpu_seconds / o.seconds.size();
+    const double grids = o.seconds.empty() ? 0 : o.prepare_cpu_seconds / o.seconds.size();
     const double p50 = percentile(o.cpu_seconds, 0.5);
     double sum = o.prepare_cpu_seconds;
     for (double c : o.cpu_seconds) sum += c;
     std::printf("%-8s %8.1f %8.1f %8.1f %10.1f %8.1f %9.3f %9.3f %9.3f %9.3f %9.1f\n", name.c_str(), 1e3 * p50,
-                1e3 * percentile(o.cpu_seconds, 0.9), 1e3 * (p50 + trees), pcl_p50 / (p50 + trees),
+                1e3 * percentile(o.cpu_seconds, 0.9), 1e3 * (p50 + grids), pcl_p50 / (p50 + grids),
                 1e3 * percentile(o.seconds, 0.5), percentile(o.translation_m, 0.5), percentile(o.translation_m, 0.9),
                 percentile(o.yaw_deg, 0.5), percentile(o.yaw_deg, 0.9), sum);
   }
   const auto serial = g_outcomes.find("pairs_in_parallel_1"), parallel = g_outcomes.find("pairs_in_parallel_2");
   if (serial != g_outcomes.end() && parallel != g_outcomes.end()) {
-    std::printf("ours, pairs spread over 1 -> 2 threads (as the pipeline), wall clock of all pairs and trees: "
+    std::printf("ours, pairs spread over 1 -> 2 threads (as the pipeline), wall clock of all pairs and grids: "
                 "%.2f s -> %.2f s, %.2fx\n", serial->second.all_pairs_seconds, parallel->second.all_pairs_seconds,
                 serial->second.all_pairs_seconds / parallel->second.all_pairs_seconds);
   }
@@ -271,9 +271,9 @@ void summary() {
     double t1 = one->second.prepare_seconds, t2 = two->second.prepare_seconds;
     for (double s : one->second.seconds) t1 += s;
     for (double s : two->second.seconds) t2 += s;
-    std::printf("ours 1 -> 2 threads, wall clock of all pairs and trees: %.2f s -> %.2f s, %.2fx\n", t1, t2, t1 / t2);
+    std::printf("ours 1 -> 2 threads, wall clock of all pairs and grids: %.2f s -> %.2f s, %.2fx\n", t1, t2, t1 / t2);
   }
-  std::printf("(ms of CPU per pair; +trees: p50 plus the trees' share per pair; x PCL: PCL's p50 over that;\n"
+  std::printf("(ms of CPU per pair; +grids: p50 plus the grids' share per pair; x PCL: PCL's p50 over that;\n"
               " t: error at the overlap's centroid, yaw in degrees, against the reference navigation)\n");
 }
 

@@ -21,7 +21,6 @@ find_package(Protobuf REQUIRED)
 find_package(gRPC CONFIG REQUIRED)
 find_package(GTest REQUIRED)
 find_package(benchmark REQUIRED)
-find_package(nanoflann 1.4 REQUIRED)  # our GICP's KD-tree (header-only)
 
 # Debian ships OpenVDB's find module, not a config file.
 list(APPEND CMAKE_MODULE_PATH "/usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/OpenVDB")

@@ -9,7 +9,7 @@ packages=(
   libeigen3-dev libpcl-dev libceres-dev libopencv-dev
   libpq-dev postgresql postgresql-contrib
   libopenvdb-dev libgdal-dev gdal-bin libproj-dev proj-data proj-bin
-  libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev libssl-dev zlib1g-dev libzstd-dev libtbb-dev
   openssl  # service_tls makes its certificates at test time
   clang libclang-rt-14-dev  # libFuzzer (scripts/fuzz-*.sh)

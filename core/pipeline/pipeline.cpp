@@ -120,9 +120,16 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   throw_if_cancelled(cancel);
 
   if (plan.registration) {
-    report("filter", 0);
-    const std::vector<Cloud::Ptr> clouds = filtered_clouds(r.submaps, config.voxel, plan, cancel);
-    clock.done("filter");
+    // PCL's GICP registers on the filtered clouds, all made first. Ours registers on submaps the
+    // cache prepares from them on first use, filtering each then: `large`'s filtered clouds
+    // would not fit beside its submaps.
+    const bool own_gicp = config.registration.gicp.engine == 1;
+    std::vector<Cloud::Ptr> clouds;
+    if (!own_gicp) {
+      report("filter", 0);
+      clouds = filtered_clouds(r.submaps, config.voxel, plan, cancel);
+      clock.done("filter");
+    }
 
     std::vector<SubmapFeatures> features;
     if (plan.features) {
@@ -133,7 +140,11 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
 
     report("register", 0);
     const DrNoiseModel dr(r.dr_poses, config.graph);
-    GicpCloudCache prepared(clouds, config.registration.gicp.neighbours);  // built on first use
+    const SubmapSet& submaps = r.submaps;
+    GicpCloudCache prepared(
+        submaps.submaps.size(),
+        [&](std::size_t i) -> Cloud::ConstPtr { return own_gicp ? voxel_filter(submaps.submaps[i].points, config.voxel) : clouds[i]; },
+        config.registration.gicp.neighbours);
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) clock.done("register");

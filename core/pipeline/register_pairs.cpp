@@ -42,8 +42,10 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
   const CandidatePair& pair = candidate.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
   const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
-  const Cloud& target = *in.clouds[pair.target];
-  const Cloud& source = *in.clouds[pair.source];
+  // Ours registers on the prepared submaps alone (coarse_to_fine.h): no clouds are held for it.
+  static const Cloud kNone;
+  const Cloud& target = in.clouds.empty() ? kNone : *in.clouds[pair.target];
+  const Cloud& source = in.clouds.empty() ? kNone : *in.clouds[pair.source];
   auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source, cancel); };
   PairRegistration reg;
   if (plan.features) {

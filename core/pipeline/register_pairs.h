@@ -18,9 +18,9 @@ struct Candidate {
   ConstraintType type = ConstraintType::kAdjacent;
 };
 
-// What registration reads besides the pairs: per submap its filtered cloud, prepared once for
-// our GICP when it registers (gicp.engine 1), and (with plan.features) its features; dead
-// reckoning for the DR gate.
+// What registration reads besides the pairs: per submap its filtered cloud for PCL's GICP
+// (gicp.engine 0; empty with ours), or prepared once for ours when it first registers
+// (gicp.engine 1), and (with plan.features) its features; dead reckoning for the DR gate.
 struct RegistrationInputs {
   const std::vector<Cloud::Ptr>& clouds;
   GicpCloudCache& prepared;

@@ -42,7 +42,7 @@ std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neig
     out->lo = out->lo.cwiseMin(out->points.back().head<2>());
     out->hi = out->hi.cwiseMax(out->points.back().head<2>());
   }
-  out->tree = std::make_unique<PointTree>(out->points);
+  out->grid = std::make_unique<ColumnGrid>(out->points);
   out->normals.assign(out->points.size(), Eigen::Vector3f::Zero());
   // Too few points for a neighbourhood: every covariance stays the identity.
   const bool none = neighbours < 3 || out->points.size() < static_cast<std::size_t>(neighbours);
@@ -65,19 +65,21 @@ void GicpCloud::ensure_normals(const std::vector<uint32_t>& indices, int threads
     std::vector<float> sq_distance(k);
     for (std::size_t m = begin; m < end; ++m) {
       const uint32_t i = missing[m];
-      const std::size_t found = tree->nearest_k(points[i], k, index.data(), sq_distance.data());
+      const std::size_t found = grid->nearest_within(points[i], k, INFINITY, nullptr, index.data(), sq_distance.data());
       normals[i] = plane_normal(points, index.data(), found);
     }
   });
 }
 
 std::size_t GicpCloud::bytes() const {
-  // The tree: nanoflann's nodes and its index permutation, about 8 bytes a point at 16 a leaf.
-  return points.size() * (sizeof(Eigen::Vector3f) * 2 + sizeof(uint8_t) + 8);
+  return points.size() * (sizeof(Eigen::Vector3f) * 2 + sizeof(uint8_t)) + (grid ? grid->bytes() : 0);
 }
 
+GicpCloudCache::GicpCloudCache(std::size_t submaps, FilteredCloud filtered, int neighbours)
+    : filtered_(std::move(filtered)), neighbours_(neighbours), entries_(submaps) {}
+
 GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours)
-    : clouds_(clouds), neighbours_(neighbours), entries_(clouds.size()) {}
+    : GicpCloudCache(clouds.size(), [&clouds](std::size_t i) { return clouds[i]; }, neighbours) {}
 
 const GicpCloud& GicpCloudCache::at(std::size_t submap) {
   std::shared_ptr<Entry> entry;
@@ -88,7 +90,7 @@ const GicpCloud& GicpCloudCache::at(std::size_t submap) {
     slot->last_used = ++uses_;
     entry = slot;
   }
-  std::call_once(entry->built, [&] { entry->cloud = prepare_gicp_cloud(*clouds_[submap], neighbours_); });
+  std::call_once(entry->built, [&] { entry->cloud = prepare_gicp_cloud(*filtered_(submap), neighbours_); });
   return *entry->cloud;
 }
 

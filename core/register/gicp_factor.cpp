@@ -69,7 +69,8 @@ Associator::Associator(const GicpCloud& target, const GicpCloud& source, const G
       // A quarter beyond the gate: a point with no neighbour then is searched again only after it
       // has moved by a quarter of the gate.
       search_m_(static_cast<float>(1.25 * max_distance_m)),
-      remembered_(overlap.source_points.size()) {}
+      remembered_(overlap.source_points.size()),
+      candidates_(overlap.source_points.size() * kCandidates) {}
 
 std::vector<GicpCorrespondence> Associator::at(const Eigen::Isometry3d& source_to_target, int threads) {
   // Float rounding of the distances and of the moved points, with room to spare.
@@ -87,27 +88,33 @@ std::vector<GicpCorrespondence> Associator::at(const Eigen::Isometry3d& source_t
   };
   Found all = parallel_sum<Found>(overlap_.source_points.size(), threads, [&](Found& found, std::size_t begin, std::size_t end) {
     found.associations.list.reserve(end - begin);
+    float sq_distances[kCandidates];
     for (std::size_t k = begin; k < end; ++k) {
       const uint32_t i = overlap_.source_points[k];
       const Eigen::Vector3f x = moved_by * source_.points[i];
       Remembered& r = remembered_[k];
+      uint32_t* listed = &candidates_[k * kCandidates];
+      // The nearest candidate now, and the farthest (what bounds a new search).
+      float nearest_sq = INFINITY, farthest_sq = 0;
+      uint32_t nearest = 0;
+      for (uint32_t c = 0; c < r.candidates; ++c) {
+        const float d = (x - target_.points[listed[c]]).squaredNorm();
+        if (d < nearest_sq) nearest_sq = d, nearest = listed[c];
+        farthest_sq = std::max(farthest_sq, d);
+      }
       const float moved = (x - r.searched_at).norm();  // NaN, so not below anything, if never searched
-      const bool same = r.found ? 2 * moved + kSlackM < r.second_m - r.nearest_m : moved + kSlackM < search_m_ - gate_m_;
-      if (!same) {
-        // The last two neighbours bound where the new two can be.
+      const float answer_m = std::min(std::sqrt(nearest_sq), gate_m_);
+      if (!(answer_m + kSlackM < r.reach_m - moved)) {
         float bound = search_m_ * search_m_;
-        if (r.found_second) {
-          bound = std::min(bound, std::max((x - target_.points[r.nearest]).squaredNorm(),
-                                           (x - target_.points[r.second]).squaredNorm()) * (1 + 1e-5f) + 1e-9f);
-        }
-        const PointTree::TwoNearest two = target_.tree->nearest_two(x, bound, allowed);
-        r = {x, two.index, two.second_index, two.found, two.found_second, std::sqrt(two.sq_distance),
-             two.found_second ? std::sqrt(two.second_sq_distance) : search_m_};
+        if (r.candidates == kCandidates) bound = std::min(bound, farthest_sq * (1 + 1e-5f) + 1e-9f);
+        r.candidates = static_cast<uint32_t>(target_.grid->nearest_within(x, kCandidates, bound, allowed, listed, sq_distances));
+        r.searched_at = x;
+        r.reach_m = std::sqrt(r.candidates == kCandidates ? sq_distances[kCandidates - 1] : bound);
+        nearest_sq = r.candidates > 0 ? sq_distances[0] : INFINITY;
+        nearest = listed[0];
         ++found.searches;
       }
-      if (r.found && (x - target_.points[r.nearest]).squaredNorm() <= gate_m_ * gate_m_) {
-        found.associations.list.push_back({i, r.nearest});
-      }
+      if (nearest_sq <= gate_m_ * gate_m_) found.associations.list.push_back({i, nearest});
     }
   });
   searches_ += all.searches;

@@ -1,7 +1,7 @@
 #pragma once
 // register (own GICP), factors: the GICP cost of one pair at a pose, linearised. Each source
-// point of the overlap finds its nearest target point within the gate (KD-tree of the whole
-// target, masked to its overlap); the pair contributes dᵀ M d with d = T p - q and
+// point of the overlap finds its nearest target point within the gate (the column grid of the
+// whole target, masked to its overlap); the pair contributes dᵀ M d with d = T p - q and
 // M = (C_q + R C_p Rᵀ)⁻¹ (Segal et al. 2009), and the normal equations Σ Jᵀ M J, Σ Jᵀ M d for
 // a perturbation about a pivot, all summed in double over threads with one reduction.
 #include <cstdint>
@@ -36,31 +36,37 @@ struct GicpCorrespondence {
 
 // Associates the overlap's source points with their nearest allowed target points within a
 // gate, at pose after pose of one registration. GICP's later iterations move the source by
-// millimetres, where most neighbours cannot have changed: a point that has moved by δ since its
-// last search keeps its neighbour if 2δ < d₂ - d₁ (d₁, d₂: distances to the nearest and second
-// nearest then, the triangle inequality), and keeps having none within the gate if no point lay
-// within `search_m` and δ < search_m - gate. Only the others are searched again, and no farther
-// than the farther of their last two neighbours, so the answer is exactly a full search's.
+// centimetres, where the nearest neighbour is still among the few nearest of the last search.
+// Each point keeps those `kCandidates` and how far the nearest unlisted point was then (`reach`:
+// the next one, or the search's bound). After a move by δ every unlisted point is at least
+// reach - δ away, so if the nearest candidate (or the gate, when none is within it) is closer
+// than that, it is the answer (the triangle inequality) and the grid is not searched. Only the others
+// are searched again, no farther than their farthest candidate now, so the answer is exactly a
+// full search's.
 class Associator {
  public:
   Associator(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap, double max_distance_m);
 
   // Every overlap source point's correspondence at `source_to_target`, in overlap order.
   std::vector<GicpCorrespondence> at(const Eigen::Isometry3d& source_to_target, int threads);
-  std::size_t searches() const { return searches_; }  // how many tree searches so far
+  std::size_t searches() const { return searches_; }
+
+  // Enough that a decimetre step keeps most points' lists (their reach is ~1.5 sounding
+  // spacings out), few enough that checking them costs less than a search.
+  static constexpr std::size_t kCandidates = 4;
 
  private:
   struct Remembered {
     Eigen::Vector3f searched_at = Eigen::Vector3f::Constant(NAN);  // moved source point; NaN: never
-    uint32_t nearest = 0, second = 0;
-    bool found = false, found_second = false;
-    float nearest_m = 0, second_m = 0;  // distances then; second_m = search_m if there was none
+    float reach_m = 0;         // every unlisted allowed target point was at least this far then
+    uint32_t candidates = 0;   // how many are listed
   };
   const GicpCloud& target_;
   const GicpCloud& source_;
   const GicpOverlap& overlap_;
   float gate_m_, search_m_;
   std::vector<Remembered> remembered_;  // one per overlap source point
+  std::vector<uint32_t> candidates_;    // kCandidates per overlap source point, nearest first
   std::size_t searches_ = 0;
 };
 
