@@ -60,15 +60,20 @@ void run_process(const ProcessOptions& o) {
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  const Survey survey = load_survey(o.survey.input()).survey;
+  Survey survey = load_survey(o.survey.input()).survey;
+  FuseConfig fuse = o.fuse;
+  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(survey, fuse.min_soundings);
   std::string last_stage;
-  const PipelineResult result = run_pipeline(survey, config, [&](std::string_view stage, double fraction) {
+  const ProgressFn progress = [&](std::string_view stage, double fraction) {
     if (stage != last_stage) {
       if (!last_stage.empty()) std::fprintf(stderr, "\n");
       last_stage = stage;
     }
     std::fprintf(stderr, "\r  %-10s %5.1f %%", std::string(stage).c_str(), 100.0 * fraction);
-  });
+  };
+  // Only the GSF export reads the beams after the submaps hold them: otherwise they go then.
+  const PipelineResult result =
+      o.export_gsf ? run_pipeline(survey, config, progress) : run_pipeline_freeing_beams(survey, config, progress);
   std::fprintf(stderr, "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -83,8 +88,6 @@ void run_process(const ProcessOptions& o) {
   }
   write_report_plots(result, o.out);
   const auto fuse_start = std::chrono::steady_clock::now();
-  FuseConfig fuse = o.fuse;
-  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(survey, fuse.min_soundings);
   const std::string map_files = write_map_products(result, survey.metadata, fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());

@@ -102,8 +102,11 @@ void evaluate(PipelineResult& r, const Plan& plan) {
 
 }  // namespace
 
-PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
-                            const std::atomic<bool>* cancel) {
+namespace {
+
+// `beams_done_with`: the survey whose beams to free once the submaps hold them (null: none).
+PipelineResult run(const Survey& survey, Survey* beams_done_with, const PipelineConfig& config,
+                   const ProgressFn& progress, const std::atomic<bool>* cancel) {
   auto report = [&](std::string_view stage, double fraction) {
     if (progress) progress(stage, fraction);
   };
@@ -114,6 +117,7 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
 
   report("submaps", 0);
   r.submaps = build_submaps(survey, config.submaps);
+  if (beams_done_with != nullptr) std::vector<Beam>().swap(beams_done_with->beams);
   for (const Submap& s : r.submaps.submaps) r.dr_poses.push_back(s.dr_pose);
   r.constraints = odometry_constraints(r.dr_poses, config.graph);
   clock.done("submaps");
@@ -164,6 +168,18 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
   clock.done("eval");
   report("done", 1);
   return r;
+}
+
+}  // namespace
+
+PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
+                            const std::atomic<bool>* cancel) {
+  return run(survey, nullptr, config, progress, cancel);
+}
+
+PipelineResult run_pipeline_freeing_beams(Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
+                                          const std::atomic<bool>* cancel) {
+  return run(survey, &survey, config, progress, cancel);
 }
 
 }  // namespace bathyslam

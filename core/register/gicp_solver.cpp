@@ -111,7 +111,7 @@ Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& over
 GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
                                   const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
-                                  double min_observed_share, double max_turn_rad, int threads,
+                                  int stall_iterations, double min_observed_share, double max_turn_rad, int threads,
                                   const std::atomic<bool>* cancel) {
   const Eigen::Translation3d to_pivot(-pivot), from_source_pivot(source_pivot);
   auto centred = [&](const Eigen::Isometry3d& t) { return Eigen::Isometry3d(to_pivot * t * from_source_pivot); };
@@ -126,6 +126,8 @@ GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& sour
   Eigen::Isometry3d at = start;        // where the next association is made
   bool accelerated = false;            // `at` is Anderson's mix, not the last answer
   double last_cost = INFINITY;         // mean cost per correspondence at the last point kept
+  double stall_cost = INFINITY;        // the cost to beat by kStallShare, and when it was set
+  int stall_since = 0;
   double lever_m = 0;                  // rotations in metres at the overlap, for Anderson's mix
   while (pass.iterations < max_iterations) {
     if (cancel != nullptr && cancel->load()) return pass;  // the job is stopping: its results go
@@ -162,12 +164,17 @@ GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& sour
       continue;
     }
     last_cost = cost;
+    if (cost < stall_cost * (1 - kStallShare)) {
+      stall_cost = cost;
+      stall_since = pass.iterations;
+    }
     // Converged by PCL's rule, or caught in a cycle: a few points near the gate or midway
     // between two target points swap their nearest neighbour back and forth and the answer
     // returns to an earlier one. PCL's rule alone never ends such a cycle at the refinement's
     // tight epsilon; the answers in it agree within `convergence`.
     const Eigen::Isometry3d centred_next = centred(next);
-    const bool done = small_change(centred(at), centred_next, convergence) ||
+    const bool stalled = stall_iterations > 0 && pass.iterations - stall_since >= stall_iterations;
+    const bool done = stalled || small_change(centred(at), centred_next, convergence) ||
                       std::any_of(answers.begin(), answers.end(), [&](const Eigen::Isometry3d& earlier) {
                         return small_change(earlier, centred_next, convergence);
                       });
@@ -193,13 +200,15 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
   const int threads = std::max(config.threads, 1);
   Associator at_gate(target, source, overlap, config.max_correspondence_m);
   const double max_turn_rad = config.max_turn_deg * M_PI / 180;
-  GaussNewtonPass pass = gauss_newton_gicp(target, source, at_gate, guess, pivot, source_pivot, config.convergence,
-                                           config.max_iterations, config.min_observed_share, max_turn_rad, threads, cancel);
+  GaussNewtonPass pass =
+      gauss_newton_gicp(target, source, at_gate, guess, pivot, source_pivot, config.convergence, config.max_iterations,
+                        config.stall_iterations, config.min_observed_share, max_turn_rad, threads, cancel);
   if (config.refine_correspondence_m > 0) {
     Associator at_refine_gate(target, source, overlap, config.refine_correspondence_m);
     const GaussNewtonPass refined =
         gauss_newton_gicp(target, source, at_refine_gate, pass.source_to_target, pivot, source_pivot,
-                          config.refine_convergence, config.max_iterations, config.min_observed_share,
+                          // Not on the refinement: it starts converged and creeps by design.
+                          config.refine_convergence, config.max_iterations, 0, config.min_observed_share,
                           max_turn_rad, threads, cancel);
     pass = {refined.source_to_target, pass.converged && refined.converged, pass.iterations + refined.iterations};
   }

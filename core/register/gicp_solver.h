@@ -17,6 +17,8 @@ namespace bathyslam {
 // PCL's GICP rotation epsilon (its default, which the wrapper keeps): an iteration that changes
 // no rotation-matrix entry by this much and no translation by `convergence` has converged.
 constexpr double kGicpRotationEpsilon = 2e-3;
+// How much a pass's mean cost must fall over GicpConfig::stall_iterations to go on.
+constexpr double kStallShare = 0.01;
 
 struct GaussNewtonPass {
   Eigen::Isometry3d source_to_target = Eigen::Isometry3d::Identity();
@@ -29,11 +31,13 @@ struct GaussNewtonPass {
 // (gicp_solver.cpp, observed_step). The rotation turns about `pivot` (target frame) and the convergence
 // rule compares the transform between the frames centred there and at `source_pivot` (source
 // frame), which is what PCL sees when the wrapper shifts the clouds (about_centroid). As in PCL,
-// reaching `max_iterations` counts as converged; too few correspondences or a singular system
+// reaching `max_iterations` counts as converged, and so does a cost that has not fallen by
+// kStallShare over `stall_iterations` (0: never); too few correspondences or a singular system
 // does not, nor does turning by more than `max_turn_rad` from `start`, nor a `cancel` set.
 GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3d& pivot,
                                   const Eigen::Vector3d& source_pivot, double convergence, int max_iterations,
+                                  int stall_iterations,
                                   double min_observed_share, double max_turn_rad, int threads,
                                   const std::atomic<bool>* cancel = nullptr);
 

@@ -262,6 +262,30 @@ TEST(OwnGicp, EmptyOrTinyCloudsDoNotConverge) {
   EXPECT_FALSE(apart.registration.quality.converged);
 }
 
+// Started 10 m off on four sparse mounds, a pass slides for over a hundred iterations at a cost
+// that hardly falls, to an answer as wrong as where it was after a few dozen: the stall rule
+// ends it there, converged as at the iteration limit.
+TEST(OwnGicp, APassWhoseCostStopsFallingEndsOnTheStallRule) {
+  const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(9, 4), 0.05);
+  const auto target = prepare_gicp_cloud(*p.target, 20), source = prepare_gicp_cloud(*p.source, 20);
+  const Eigen::Isometry3d guess = planar_pose(10, 5, 2) * p.truth;
+  const GicpOverlap overlap = gicp_overlap(*target, *source, guess, 1.0);
+  const Eigen::Vector3d anchor = source_centroid(*source, overlap);
+  auto pass = [&](int stall_iterations) {
+    Associator associator(*target, *source, overlap, 3.0);
+    return gauss_newton_gicp(*target, *source, associator, guess, guess * anchor, anchor, 1e-3, 300, stall_iterations,
+                             GicpConfig{}.min_observed_share, M_PI, 1);
+  };
+  const GaussNewtonPass sliding = pass(0), stalled = pass(40);
+  ASSERT_GT(sliding.iterations, 100) << "the case no longer slides";
+  EXPECT_TRUE(stalled.converged);
+  EXPECT_LT(stalled.iterations, sliding.iterations / 2);
+  const double slid_m = (p.truth.inverse() * sliding.source_to_target).translation().norm();
+  const double stalled_m = (p.truth.inverse() * stalled.source_to_target).translation().norm();
+  EXPECT_GT(std::min(slid_m, stalled_m), 5.0) << "neither pass found the answer";
+  EXPECT_NEAR(stalled_m, slid_m, 1.0);
+}
+
 TEST(OwnGicp, AFlatBottomPinsDepthAndStaysFinite) {
   const MoundPair p = mound_pair(SyntheticTerrain::flat(), 0.01);
   Eigen::Isometry3d guess = off(p.truth);
