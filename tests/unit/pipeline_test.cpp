@@ -124,6 +124,24 @@ TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
   EXPECT_LT(r.consistency.stats.rmse, r.dr_consistency.stats.rmse);
 }
 
+// A caller done with the soundings gets the same result with the beams freed once the submaps
+// hold them, and keeps the navigation and pings the corrected navigation needs.
+TEST(Pipeline, FreeingTheBeamsChangesNoResult) {
+  PipelineConfig config = preset_config(Configuration::kGicp);
+  Survey survey = small_survey();
+  const PipelineResult kept = run_pipeline(survey, config);
+  const PipelineResult freed = run_pipeline_freeing_beams(survey, config);
+  EXPECT_TRUE(survey.beams.empty());
+  EXPECT_EQ(survey.beams.capacity(), 0u) << "their memory went too";
+  EXPECT_EQ(survey.nav.size(), small_survey().nav.size());
+  EXPECT_EQ(survey.pings.size(), small_survey().pings.size());
+  ASSERT_EQ(freed.optimized_poses.size(), kept.optimized_poses.size());
+  for (std::size_t i = 0; i < kept.optimized_poses.size(); ++i) {
+    EXPECT_TRUE(freed.optimized_poses[i].isApprox(kept.optimized_poses[i], 1e-12)) << "submap " << i;
+  }
+  EXPECT_EQ(corrected_navigation(survey, freed).size(), corrected_navigation(small_survey(), kept).size());
+}
+
 class MchsPipeline : public testing::Test {
  protected:
   static void SetUpTestSuite() { result_ = new PipelineResult(run(Configuration::kMchs)); }
