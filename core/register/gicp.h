@@ -27,7 +27,7 @@ struct GicpConfig {  // Table 1 (c)
   double refine_convergence = 1e-6;
   // Which GICP registers: 0 PCL's GeneralizedIterativeClosestPoint (the reference, kept for the
   // benchmark and as a setting), 1 ours (gicp_solver.h) on submaps prepared once
-  // (gicp_cloud.h), same parameters and rule; more accurate and 1.4x faster per pair on `lake`
+  // (gicp_cloud.h), same parameters and rule; more accurate and 2.1x faster per pair on `lake`
   // (README, Benchmarks, Performance).
   int engine = 1;
   // Ours only: directions (rotations in metres at the overlap) that the terrain observes less
