@@ -145,10 +145,10 @@ PipelineResult run(const Survey& survey, Survey* beams_done_with, const Pipeline
     report("register", 0);
     const DrNoiseModel dr(r.dr_poses, config.graph);
     const SubmapSet& submaps = r.submaps;
-    GicpCloudCache prepared(
-        submaps.submaps.size(),
-        [&](std::size_t i) -> Cloud::ConstPtr { return own_gicp ? voxel_filter(submaps.submaps[i].points, config.voxel) : clouds[i]; },
-        config.registration.gicp.neighbours);
+    const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {
+      return own_gicp ? voxel_filter(submaps.submaps[i].points, config.voxel) : clouds[i];
+    };
+    GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp.neighbours);
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) clock.done("register");

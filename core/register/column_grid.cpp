@@ -71,7 +71,7 @@ ColumnGrid::ColumnGrid(const std::vector<Eigen::Vector3f>& points) {
 
 std::size_t ColumnGrid::nearest_within(const Eigen::Vector3f& query, std::size_t k, float max_sq_distance,
                                        const uint8_t* allowed, uint32_t* indices, float* sq_distances) const {
-  if (sorted_.empty() || k == 0) return 0;
+  if (sorted_.empty() || k == 0 || !query.allFinite()) return 0;
   NearestSoFar nearest(k, max_sq_distance, indices, sq_distances);
   // The query's column, possibly outside the grid (clamped far enough not to overflow).
   const float fx = std::clamp((query.x() - origin_.x()) / cell_m_, -1e6f, 1e6f);

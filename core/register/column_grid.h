@@ -22,7 +22,7 @@ class ColumnGrid {
   // The k nearest points with `allowed[index]` set (all points if `allowed` is null) closer
   // than sqrt(max_sq_distance), nearest first; returns how many. Indices are into the points
   // the grid was built from. The mask is how a pair registers only its predicted overlap on
-  // the grid of the whole submap.
+  // the grid of the whole submap. A query that is not finite finds nothing.
   std::size_t nearest_within(const Eigen::Vector3f& query, std::size_t k, float max_sq_distance, const uint8_t* allowed,
                              uint32_t* indices, float* sq_distances) const;
 

@@ -88,11 +88,15 @@ TEST(ColumnGrid, FindsWhatBruteForceFindsOnAWallAndAlongALine) {
   expect_brute_force(line, queries_around(line, rng), {});
 }
 
-TEST(ColumnGrid, AnEmptyGridFindsNothing) {
-  const ColumnGrid grid({});
+TEST(ColumnGrid, AnEmptyGridOrANonFiniteQueryFindsNothing) {
   uint32_t index = 0;
   float sq = 0;
-  EXPECT_EQ(grid.nearest_within(Eigen::Vector3f::Zero(), 1, INFINITY, nullptr, &index, &sq), 0u);
+  EXPECT_EQ(ColumnGrid({}).nearest_within(Eigen::Vector3f::Zero(), 1, INFINITY, nullptr, &index, &sq), 0u);
+  const ColumnGrid grid({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 1, 0)});
+  EXPECT_EQ(grid.nearest_within(Eigen::Vector3f(NAN, 0, 0), 1, INFINITY, nullptr, &index, &sq), 0u);
+  EXPECT_EQ(grid.nearest_within(Eigen::Vector3f(0, INFINITY, 0), 1, INFINITY, nullptr, &index, &sq), 0u);
+  EXPECT_EQ(grid.nearest_within(Eigen::Vector3f(0.9f, 0.9f, 0), 1, INFINITY, nullptr, &index, &sq), 1u);
+  EXPECT_EQ(index, 1u);
 }
 
 }  // namespace
