@@ -144,9 +144,10 @@ PipelineResult run(const Survey& survey, Survey* beams_done_with, const Pipeline
 
     report("register", 0);
     const DrNoiseModel dr(r.dr_poses, config.graph);
+    // Only ours asks the cache for a submap (prepared_pair): it filters each on first use.
     const SubmapSet& submaps = r.submaps;
     const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {
-      return own_gicp ? voxel_filter(submaps.submaps[i].points, config.voxel) : clouds[i];
+      return voxel_filter(submaps.submaps[i].points, config.voxel);
     };
     GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp.neighbours);
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);

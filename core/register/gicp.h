@@ -45,8 +45,9 @@ struct GicpConfig {  // Table 1 (c)
   // iterations ends there, as at the iteration limit (converged, in PCL's sense). Such a pass is
   // sliding along what the terrain does not hold, by decimetres an iteration (seen on `lake`: a
   // pair started 12 m off took 300 iterations to lower its cost by 12 %, every point searched
-  // again each time, to an answer 11 m off); more iterations move it, hardly fitting it better. 40, not 20: at 20 `lake` seed 1's
-  // consistency RMSE rose 16 %, at 40 it did not move (README, "Performance"). 0: never.
+  // again each time, to an answer 11 m off); more iterations move it, hardly fitting it better.
+  // 40, not 20: at 20 `lake` seed 1's consistency RMSE rose 16 %, at 40 it did not move
+  // (README, "Performance"). 0: never.
   int stall_iterations = 40;
   // Threads inside one registration (ours only). The pipeline registers pairs in parallel
   // instead, so 1 there; the benchmark measures both.

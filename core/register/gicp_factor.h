@@ -40,9 +40,9 @@ struct GicpCorrespondence {
 // Each point keeps those `kCandidates` and how far the nearest unlisted point was then (`reach`:
 // the next one, or the search's bound). After a move by δ every unlisted point is at least
 // reach - δ away, so if the nearest candidate (or the gate, when none is within it) is closer
-// than that, it is the answer (the triangle inequality) and the grid is not searched. Only the others
-// are searched again, no farther than their farthest candidate now, so the answer is exactly a
-// full search's.
+// than that, it is the answer (the triangle inequality) and the grid is not searched. Only the
+// others are searched again, no farther than their farthest candidate now, so the answer is
+// exactly a full search's.
 class Associator {
  public:
   Associator(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap, double max_distance_m);
