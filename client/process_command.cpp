@@ -2,6 +2,8 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,15 +56,47 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
   }
 }
 
+// The pings as they are read, into submaps and the swaths the map's cell size needs: without
+// --export-gsf nothing reads a sounding again, so they need not be held (README "Performance").
+class SubmapsFromPings : public PingSink {
+ public:
+  explicit SubmapsFromPings(const SubmapConfig& config) : config_(config) {}
+  void begin(const Survey& survey) override { builder_.emplace(survey.nav, survey.reference_nav, config_); }
+  void ping(double time, std::span<const Beam> beams) override {
+    builder_->add_ping(time, beams);
+    swaths_.push_back(ping_swath(time, beams));
+  }
+  SubmapSet submaps() { return builder_ ? builder_->finish() : SubmapSet{}; }
+  const std::vector<PingSwath>& swaths() const { return swaths_; }
+
+ private:
+  SubmapConfig config_;
+  std::optional<SubmapBuilder> builder_;
+  std::vector<PingSwath> swaths_;
+};
+
 void run_process(const ProcessOptions& o) {
   PipelineConfig config = preset_config(parse_configuration(o.config));
   config.threads = o.threads;
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  Survey survey = load_survey(o.survey.input()).survey;
+  Survey survey;
+  SubmapSet submaps;
+  SweptArea swept;
+  if (o.export_gsf) {
+    survey = load_survey(o.survey.input()).survey;
+    submaps = build_submaps(survey, config.submaps);
+    swept = swept_area(survey);
+  } else {
+    SubmapsFromPings sink(config.submaps);
+    survey = load_survey(o.survey.input(), sink).survey;
+    submaps = sink.submaps();
+    swept = swept_area(survey.nav, sink.swaths());
+  }
+  const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   FuseConfig fuse = o.fuse;
-  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(survey, fuse.min_soundings);
+  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(swept, fuse.min_soundings);
   std::string last_stage;
   const ProgressFn progress = [&](std::string_view stage, double fraction) {
     if (stage != last_stage) {
@@ -71,9 +105,7 @@ void run_process(const ProcessOptions& o) {
     }
     std::fprintf(stderr, "\r  %-10s %5.1f %%", std::string(stage).c_str(), 100.0 * fraction);
   };
-  // Only the GSF export reads the beams after the submaps hold them: otherwise they go then.
-  const PipelineResult result =
-      o.export_gsf ? run_pipeline(survey, config, progress) : run_pipeline_freeing_beams(survey, config, progress);
+  const PipelineResult result = run_pipeline(std::move(submaps), read_seconds, config, progress);
   std::fprintf(stderr, "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

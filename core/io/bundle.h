@@ -3,7 +3,9 @@
 // nav.csv, pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
 // only when there is no error; every problem names its file, line and field.
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
@@ -40,8 +42,15 @@ struct TimeSpan {
   double end = 0;
 };
 
-// Appends the pings and beams of `source` to `pings`/`beams`. With `nav_span`, pings outside it
-// are reported as one warning (the sync stage drops them).
+// A ping as a reader hands it on: its time and its beams, valid during the call only.
+using PingFn = std::function<void(double time, std::span<const Beam> beams)>;
+
+// Hands each ping of `source` to `on_ping` in file order, its beams as far as they parsed. With
+// `nav_span`, pings outside it are reported as one warning (the sync stage drops them).
+void stream_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
+                      ProblemList& problems, const PingFn& on_ping);
+
+// stream_pings_csv appending the pings and beams to `pings`/`beams`.
 void parse_pings_csv(ByteSource& source, std::string_view file,
                      const std::optional<TimeSpan>& nav_span, ProblemList& problems,
                      std::vector<Ping>& pings, std::vector<Beam>& beams);
@@ -54,6 +63,22 @@ struct BundleReadResult {
 };
 
 BundleReadResult read_bundle(const std::filesystem::path& bundle);  // a folder or a tar
+
+// Where stream_bundle hands the pings: a survey's soundings are most of its memory (`large`:
+// 2.6 GB), so a reader that only turns them into something else need not hold them all.
+class PingSink {
+ public:
+  virtual ~PingSink() = default;
+  // Before the first ping: the survey read so far, its metadata, navigation and reference
+  // navigation (possibly with errors already: the pings are read on to report theirs).
+  virtual void begin(const Survey& survey) = 0;
+  virtual void ping(double time, std::span<const Beam> beams) = 0;
+};
+
+// read_bundle handing the pings to `sink` as they are read: the survey comes back without pings
+// and beams. A bundle with errors comes back without a survey as from read_bundle, but the sink
+// has seen pings by then: the caller discards what it made of them.
+BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& sink);
 
 class BundleError : public std::runtime_error {
  public:

@@ -171,9 +171,8 @@ std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
   return nav;
 }
 
-void parse_pings_csv(ByteSource& source, std::string_view file,
-                     const std::optional<TimeSpan>& nav_span, ProblemList& problems,
-                     std::vector<Ping>& pings, std::vector<Beam>& beams) {
+void stream_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
+                      ProblemList& problems, const PingFn& on_ping) {
   static constexpr std::array<std::string_view, 5> kColumns = {"time", "beam", "along", "across",
                                                                "down"};
   const std::size_t errors_before = problems.error_count();
@@ -186,8 +185,9 @@ void parse_pings_csv(ByteSource& source, std::string_view file,
   std::string time_text;
   double time = -std::numeric_limits<double>::infinity();
   bool in_ping = false;
+  std::vector<Beam> ping_beams;  // the ping being read: handed on when the next one starts
+  std::size_t pings = 0, soundings = 0;
   std::size_t outside_pings = 0, first_outside_line = 0;
-  const std::size_t first_new_ping = pings.size();
 
   while (lines.next(line)) {
     const std::size_t n = lines.line_number();
@@ -204,9 +204,11 @@ void parse_pings_csv(ByteSource& source, std::string_view file,
       }
       time_text.assign(fields[0]);
       if (!in_ping || t != time) {
+        if (in_ping) on_ping(time, ping_beams);
+        ping_beams.clear();
         time = t;
         in_ping = true;
-        pings.push_back({t, static_cast<uint32_t>(beams.size()), 0});
+        ++pings;
         if (nav_span && (t < nav_span->begin || t > nav_span->end) && outside_pings++ == 0) {
           first_outside_line = n;
         }
@@ -219,22 +221,22 @@ void parse_pings_csv(ByteSource& source, std::string_view file,
     ok &= parse_field(fields[3], beam.across, file, n, kColumns[3], problems);
     ok &= parse_field(fields[4], beam.down, file, n, kColumns[4], problems);
     if (!ok) continue;
-    Ping& ping = pings.back();
-    if (ping.beam_count > 0 && beam.index <= beams.back().index) {
+    if (!ping_beams.empty() && beam.index <= ping_beams.back().index) {
       problems.error(std::string(file), n, "beam",
                      "beam " + std::to_string(beam.index) + " follows beam " +
-                         std::to_string(beams.back().index) +
+                         std::to_string(ping_beams.back().index) +
                          " in the same ping; beams must increase within a ping");
       continue;
     }
-    if (beams.size() >= std::numeric_limits<uint32_t>::max()) {
+    if (soundings >= std::numeric_limits<uint32_t>::max()) {
       problems.error(std::string(file), n, "", "more than 2^32 soundings");
       return;
     }
-    beams.push_back(beam);
-    ++ping.beam_count;
+    ping_beams.push_back(beam);
+    ++soundings;
   }
-  if (pings.size() == first_new_ping && problems.error_count() == errors_before) {
+  if (in_ping) on_ping(time, ping_beams);
+  if (pings == 0 && problems.error_count() == errors_before) {
     problems.error(std::string(file), 0, "", "no pings");
   }
   if (outside_pings > 0) {
@@ -246,7 +248,37 @@ void parse_pings_csv(ByteSource& source, std::string_view file,
   }
 }
 
-BundleReadResult read_bundle(const std::filesystem::path& bundle) {
+namespace {
+
+void append_ping(double time, std::span<const Beam> ping_beams, std::vector<Ping>& pings, std::vector<Beam>& beams) {
+  pings.push_back({time, static_cast<uint32_t>(beams.size()), static_cast<uint32_t>(ping_beams.size())});
+  beams.insert(beams.end(), ping_beams.begin(), ping_beams.end());
+}
+
+// read_bundle's sink: the pings and beams, for the survey they came with.
+class SurveyPings : public PingSink {
+ public:
+  void begin(const Survey&) override {}
+  void ping(double time, std::span<const Beam> beams) override { append_ping(time, beams, pings_, beams_); }
+  void move_into(Survey& survey) {
+    survey.pings = std::move(pings_);
+    survey.beams = std::move(beams_);
+  }
+
+ private:
+  std::vector<Ping> pings_;
+  std::vector<Beam> beams_;
+};
+
+}  // namespace
+
+void parse_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
+                     ProblemList& problems, std::vector<Ping>& pings, std::vector<Beam>& beams) {
+  stream_pings_csv(source, file, nav_span, problems,
+                   [&](double time, std::span<const Beam> ping_beams) { append_ping(time, ping_beams, pings, beams); });
+}
+
+BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& sink) {
   ProblemList problems;
   Survey survey;
   std::optional<BundleFiles> files;
@@ -285,16 +317,25 @@ BundleReadResult read_bundle(const std::filesystem::path& bundle) {
     guarded(kNavFile, [&] { survey.nav = parse_nav_csv(*nav, kNavFile, problems); });
     if (survey.nav.size() >= 2) nav_span = TimeSpan{survey.nav.front().time, survey.nav.back().time};
   }
-  if (auto pings = open(kPingsFile, true)) {
-    guarded(kPingsFile, [&] { parse_pings_csv(*pings, kPingsFile, nav_span, problems, survey.pings, survey.beams); });
-  }
   if (auto reference = open(kReferenceNavFile, false)) {
     guarded(kReferenceNavFile, [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems); });
+  }
+  if (auto pings = open(kPingsFile, true)) {
+    sink.begin(survey);
+    const PingFn on_ping = [&](double time, std::span<const Beam> beams) { sink.ping(time, beams); };
+    guarded(kPingsFile, [&] { stream_pings_csv(*pings, kPingsFile, nav_span, problems, on_ping); });
   }
 
   BundleReadResult result;
   if (!problems.has_errors()) result.survey = std::move(survey);
   result.problems = problems.take();
+  return result;
+}
+
+BundleReadResult read_bundle(const std::filesystem::path& bundle) {
+  SurveyPings sink;
+  BundleReadResult result = stream_bundle(bundle, sink);
+  if (result.survey) sink.move_into(*result.survey);
   return result;
 }
 

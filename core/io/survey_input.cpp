@@ -7,13 +7,12 @@
 
 namespace bathyslam {
 
-LoadedSurvey load_survey(const SurveyInput& input) {
+namespace {
+
+// True for GSF files; throws for inputs that are neither GSF files nor a bundle on its own.
+bool is_gsf_input(const SurveyInput& input) {
   if (input.paths.empty()) throw std::runtime_error("no survey given");
-  const bool all_gsf = std::all_of(input.paths.begin(), input.paths.end(), gsf::is_gsf_path);
-  if (all_gsf) {
-    gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
-    return {std::move(read.survey), std::move(read.files)};
-  }
+  if (std::all_of(input.paths.begin(), input.paths.end(), gsf::is_gsf_path)) return true;
   if (input.paths.size() > 1) {
     throw std::runtime_error("several inputs must all be GSF files (.gsf); a bundle comes alone");
   }
@@ -22,7 +21,34 @@ LoadedSurvey load_survey(const SurveyInput& input) {
                              ": --crs and --reference-nav are for GSF input; a bundle names its CRS in survey.json "
                              "and holds reference_nav.csv");
   }
+  return false;
+}
+
+LoadedSurvey read_gsf(const SurveyInput& input) {
+  gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
+  return {std::move(read.survey), std::move(read.files)};
+}
+
+}  // namespace
+
+LoadedSurvey load_survey(const SurveyInput& input) {
+  if (is_gsf_input(input)) return read_gsf(input);
   return {load_bundle(input.paths.front()), {}};
+}
+
+LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
+  if (!is_gsf_input(input)) {
+    BundleReadResult read = stream_bundle(input.paths.front(), sink);
+    if (!read.survey) throw BundleError(std::move(read.problems));
+    return {std::move(*read.survey), {}};
+  }
+  LoadedSurvey loaded = read_gsf(input);
+  Survey& survey = loaded.survey;
+  sink.begin(survey);
+  for (const Ping& ping : survey.pings) sink.ping(ping.time, survey.beams_of(ping));
+  std::vector<Ping>().swap(survey.pings);
+  std::vector<Beam>().swap(survey.beams);
+  return loaded;
 }
 
 }  // namespace bathyslam

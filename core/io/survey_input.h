@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/io/bundle.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/types/survey.h"
 
@@ -26,5 +27,10 @@ struct LoadedSurvey {
 // Reads the survey; throws BundleError, gsf::GsfError or std::runtime_error naming the input.
 // GSF options given with a bundle, or a bundle given with other paths, are refused.
 LoadedSurvey load_survey(const SurveyInput& input);
+
+// The same handing the pings to `sink` (bundle.h) instead of keeping them: the survey comes back
+// without pings and beams. A bundle's pings stream from its file, so that its soundings are never
+// held whole; GSF files are read whole, then handed on and freed.
+LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink);
 
 }  // namespace bathyslam

@@ -2,6 +2,10 @@
 
 #include <chrono>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/register_pairs.h"
 #include "core/pipeline/robust_backend.h"
@@ -13,9 +17,19 @@ namespace {
 // keeps the last lines', which its next pairs reuse, instead of growing by ~1 MB a submap.
 constexpr std::size_t kPreparedSubmapsBudgetBytes = std::size_t{1} << 30;
 
+// The register stage frees ~1.5 GB on `large` (prepared submaps, features) in pieces the allocator
+// keeps for reuse, but the map made next needs pieces of other sizes: without this, a process's
+// peak is the register stage's memory plus the map's (README "Performance").
+void return_freed_memory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+
 class StageClock {
  public:
-  explicit StageClock(std::vector<StageTiming>& timings) : timings_(timings) {}
+  StageClock(std::vector<StageTiming>& timings, std::chrono::steady_clock::time_point start)
+      : timings_(timings), start_(start) {}
   void done(const std::string& stage) {
     const auto now = std::chrono::steady_clock::now();
     timings_.push_back({stage, std::chrono::duration<double>(now - start_).count()});
@@ -24,7 +38,7 @@ class StageClock {
 
  private:
   std::vector<StageTiming>& timings_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point start_;
 };
 
 std::vector<Cloud::Ptr> filtered_clouds(const SubmapSet& submaps, const VoxelConfig& voxel, const Plan& plan,
@@ -104,8 +118,8 @@ void evaluate(PipelineResult& r, const Plan& plan) {
 
 namespace {
 
-// `beams_done_with`: the survey whose beams to free once the submaps hold them (null: none).
-PipelineResult run(const Survey& survey, Survey* beams_done_with, const PipelineConfig& config,
+// `built_since`: when the making of `built` began, for the "submaps" stage's time.
+PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_since, const PipelineConfig& config,
                    const ProgressFn& progress, const std::atomic<bool>* cancel) {
   auto report = [&](std::string_view stage, double fraction) {
     if (progress) progress(stage, fraction);
@@ -113,11 +127,9 @@ PipelineResult run(const Survey& survey, Survey* beams_done_with, const Pipeline
   const Plan plan = plan_of(config);
   PipelineResult r;
   r.config = config;
-  StageClock clock(r.timings);
+  StageClock clock(r.timings, built_since);
 
-  report("submaps", 0);
-  r.submaps = build_submaps(survey, config.submaps);
-  if (beams_done_with != nullptr) std::vector<Beam>().swap(beams_done_with->beams);
+  r.submaps = std::move(built);
   for (const Submap& s : r.submaps.submaps) r.dr_poses.push_back(s.dr_pose);
   r.constraints = odometry_constraints(r.dr_poses, config.graph);
   clock.done("submaps");
@@ -152,7 +164,10 @@ PipelineResult run(const Survey& survey, Survey* beams_done_with, const Pipeline
     GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp.neighbours);
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
-  if (plan.registration) clock.done("register");
+  if (plan.registration) {
+    return_freed_memory();
+    clock.done("register");
+  }
 
   report("graph", 0);
   if (plan.safety_net) {
@@ -175,12 +190,17 @@ PipelineResult run(const Survey& survey, Survey* beams_done_with, const Pipeline
 
 PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
                             const std::atomic<bool>* cancel) {
-  return run(survey, nullptr, config, progress, cancel);
+  const auto start = std::chrono::steady_clock::now();
+  if (progress) progress("submaps", 0);
+  return run(build_submaps(survey, config.submaps), start, config, progress, cancel);
 }
 
-PipelineResult run_pipeline_freeing_beams(Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
-                                          const std::atomic<bool>* cancel) {
-  return run(survey, &survey, config, progress, cancel);
+PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
+                            const ProgressFn& progress, const std::atomic<bool>* cancel) {
+  const auto built_since = std::chrono::steady_clock::now() -
+                           std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                               std::chrono::duration<double>(submaps_seconds));
+  return run(std::move(submaps), built_since, config, progress, cancel);
 }
 
 }  // namespace bathyslam

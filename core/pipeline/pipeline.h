@@ -58,10 +58,10 @@ using ProgressFn = std::function<void(std::string_view stage, double fraction)>;
 PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config,
                             const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
 
-// The same for a caller done with the soundings: `survey`'s beams are freed as soon as the
-// submaps hold them (a large survey's biggest allocation, README "Performance"). Its
-// navigation, pings and metadata stay, for the corrected navigation.
-PipelineResult run_pipeline_freeing_beams(Survey& survey, const PipelineConfig& config, const ProgressFn& progress = {},
-                                          const std::atomic<bool>* cancel = nullptr);
+// The same from submaps the caller built (build_submaps with `config.submaps`, or a reader
+// streaming the pings into a SubmapBuilder, so that a survey's soundings are never held twice:
+// README "Performance"); `submaps_seconds`, the time that took, is the "submaps" stage's.
+PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
+                            const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace bathyslam

@@ -8,27 +8,6 @@
 namespace bathyslam {
 namespace {
 
-struct PosedPing {
-  std::size_t ping = 0;
-  Eigen::Isometry3d pose;  // vehicle -> map, from the navigation at the ping's time
-};
-
-// sync: the navigation at every ping's time; pings outside the navigation are counted, not posed.
-std::vector<PosedPing> sync_pings(const Survey& survey, const LocalOrigin& origin,
-                                  std::size_t& dropped) {
-  std::vector<PosedPing> posed;
-  posed.reserve(survey.pings.size());
-  for (std::size_t i = 0; i < survey.pings.size(); ++i) {
-    const auto nav = interpolate_nav(survey.nav, survey.pings[i].time);
-    if (!nav) {
-      ++dropped;
-      continue;
-    }
-    posed.push_back({i, vehicle_pose(*nav, origin)});
-  }
-  return posed;
-}
-
 int line_at(const std::vector<SurveyLine>& lines, const std::vector<NavSample>& nav, double time) {
   for (std::size_t l = 0; l < lines.size(); ++l) {
     if (time >= nav[lines[l].first].time && time <= nav[lines[l].last].time) return static_cast<int>(l);
@@ -36,53 +15,75 @@ int line_at(const std::vector<SurveyLine>& lines, const std::vector<NavSample>& 
   return -1;
 }
 
+LocalOrigin local_origin_of(const std::vector<NavSample>& nav) {
+  if (nav.empty()) return {};
+  return {std::round(nav.front().easting / 100.0) * 100.0, std::round(nav.front().northing / 100.0) * 100.0};
+}
+
 }  // namespace
 
-LocalOrigin local_origin_of(const Survey& survey) {
-  if (survey.nav.empty()) return {};
-  return {std::round(survey.nav.front().easting / 100.0) * 100.0,
-          std::round(survey.nav.front().northing / 100.0) * 100.0};
+LocalOrigin local_origin_of(const Survey& survey) { return local_origin_of(survey.nav); }
+
+SubmapBuilder::SubmapBuilder(std::vector<NavSample> nav, std::optional<std::vector<NavSample>> reference_nav,
+                             const SubmapConfig& config)
+    : nav_(std::move(nav)), reference_nav_(std::move(reference_nav)), config_(config) {
+  set_.origin = local_origin_of(nav_);
+  set_.lines = split_lines(nav_);
+}
+
+// sync: the navigation at the ping's time; a ping outside the navigation is counted, not posed.
+void SubmapBuilder::add_ping(double time, std::span<const Beam> beams) {
+  const auto nav = interpolate_nav(nav_, time);
+  if (!nav) {
+    ++set_.pings_dropped;
+    return;
+  }
+  pending_.push_back({time, vehicle_pose(*nav, set_.origin), pending_beams_.size(), beams.size()});
+  pending_beams_.insert(pending_beams_.end(), beams.begin(), beams.end());
+  if (pending_.size() == static_cast<std::size_t>(config_.pings_per_submap)) close_submap();
+}
+
+SubmapSet SubmapBuilder::finish() {
+  if (!pending_.empty()) close_submap();
+  return std::move(set_);
+}
+
+void SubmapBuilder::close_submap() {
+  const PendingPing& mid = pending_[(pending_.size() - 1) / 2];
+  Submap submap;
+  submap.index = static_cast<int>(set_.submaps.size());
+  submap.time_begin = pending_.front().time;
+  submap.time_end = pending_.back().time;
+  submap.time_mid = mid.time;
+  submap.line = line_at(set_.lines, nav_, submap.time_mid);
+  submap.dr_pose = mid.pose;
+  if (reference_nav_) {
+    if (const auto ref = interpolate_nav(*reference_nav_, submap.time_mid)) {
+      submap.reference_pose = vehicle_pose(*ref, set_.origin);
+    }
+  }
+  // georef: beams -> map (by their ping's pose) -> submap frame. Exactly as many points as
+  // beams: grown by doubling, a submap's points could take up to twice the memory they use,
+  // and they are most of a survey's.
+  const Eigen::Isometry3d map_to_submap = submap.dr_pose.inverse();
+  submap.points.reserve(pending_beams_.size());
+  for (const PendingPing& ping : pending_) {
+    const Eigen::Isometry3d ping_to_submap = map_to_submap * ping.pose;
+    for (std::size_t b = ping.first_beam; b < ping.first_beam + ping.beam_count; ++b) {
+      const Beam& beam = pending_beams_[b];
+      submap.points.push_back((ping_to_submap * Eigen::Vector3d(beam.along, beam.across, beam.down)).cast<float>());
+    }
+  }
+  submap.extent = extent_of(submap.points);
+  set_.submaps.push_back(std::move(submap));
+  pending_.clear();
+  pending_beams_.clear();
 }
 
 SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config) {
-  SubmapSet set;
-  set.origin = local_origin_of(survey);
-  set.lines = split_lines(survey.nav);
-  const std::vector<PosedPing> posed = sync_pings(survey, set.origin, set.pings_dropped);
-
-  const std::size_t n = static_cast<std::size_t>(config.pings_per_submap);
-  for (std::size_t first = 0; first < posed.size(); first += n) {
-    const std::size_t last = std::min(first + n, posed.size()) - 1;
-    const PosedPing& mid = posed[(first + last) / 2];
-    Submap submap;
-    submap.index = static_cast<int>(set.submaps.size());
-    submap.time_begin = survey.pings[posed[first].ping].time;
-    submap.time_end = survey.pings[posed[last].ping].time;
-    submap.time_mid = survey.pings[mid.ping].time;
-    submap.line = line_at(set.lines, survey.nav, submap.time_mid);
-    submap.dr_pose = mid.pose;
-    if (survey.reference_nav) {
-      if (const auto ref = interpolate_nav(*survey.reference_nav, submap.time_mid)) {
-        submap.reference_pose = vehicle_pose(*ref, set.origin);
-      }
-    }
-    // georef: beams -> map (by their ping's pose) -> submap frame.
-    const Eigen::Isometry3d map_to_submap = submap.dr_pose.inverse();
-    // Exactly as many as the beams: grown by doubling, a submap's points could take up to twice
-    // the memory they use, and they are most of a survey's.
-    std::size_t beams = 0;
-    for (std::size_t k = first; k <= last; ++k) beams += survey.pings[posed[k].ping].beam_count;
-    submap.points.reserve(beams);
-    for (std::size_t k = first; k <= last; ++k) {
-      const Eigen::Isometry3d ping_to_submap = map_to_submap * posed[k].pose;
-      for (const Beam& b : survey.beams_of(survey.pings[posed[k].ping])) {
-        submap.points.push_back((ping_to_submap * Eigen::Vector3d(b.along, b.across, b.down)).cast<float>());
-      }
-    }
-    submap.extent = extent_of(submap.points);
-    set.submaps.push_back(std::move(submap));
-  }
-  return set;
+  SubmapBuilder builder(survey.nav, survey.reference_nav, config);
+  for (const Ping& ping : survey.pings) builder.add_ping(ping.time, survey.beams_of(ping));
+  return builder.finish();
 }
 
 Eigen::AlignedBox2f extent_of(const std::vector<Eigen::Vector3f>& points) {

@@ -3,6 +3,7 @@
 // at their times, grouped N at a time; each submap's frame is the vehicle pose at its middle
 // ping, and its soundings are stored in that frame (centred, so floats keep millimetres).
 #include <optional>
+#include <span>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -46,6 +47,31 @@ struct SubmapSet {
 
 // The map frame's origin for a survey: its first navigation sample, rounded to 100 m.
 LocalOrigin local_origin_of(const Survey& survey);
+
+// Submaps built one ping at a time, in time order, so that a reader streaming the pings holds
+// no more than one submap's beams (`large`'s beams and points together were 4.5 GB).
+class SubmapBuilder {
+ public:
+  SubmapBuilder(std::vector<NavSample> nav, std::optional<std::vector<NavSample>> reference_nav,
+                const SubmapConfig& config = {});
+  void add_ping(double time, std::span<const Beam> beams);
+  SubmapSet finish();  // the builder is spent
+
+ private:
+  struct PendingPing {
+    double time = 0;
+    Eigen::Isometry3d pose;  // vehicle -> map, from the navigation at the ping's time
+    std::size_t first_beam = 0, beam_count = 0;  // in pending_beams_
+  };
+  void close_submap();
+
+  std::vector<NavSample> nav_;
+  std::optional<std::vector<NavSample>> reference_nav_;
+  SubmapConfig config_;
+  SubmapSet set_;
+  std::vector<PendingPing> pending_;  // posed pings of the submap being gathered
+  std::vector<Beam> pending_beams_;
+};
 
 SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config = {});
 

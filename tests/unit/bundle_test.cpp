@@ -313,5 +313,59 @@ TEST_F(BundleTest, LoadBundleThrowsWithEveryError) {
   }
 }
 
+// What a sink saw: the survey as begin() got it, then each ping.
+class RecordingSink : public PingSink {
+ public:
+  void begin(const Survey& survey) override {
+    nav_at_begin = survey.nav.size();
+    reference_at_begin = survey.reference_nav.has_value();
+    pings_before_begin = pings.size();
+  }
+  void ping(double time, std::span<const Beam> beams) override {
+    pings.push_back({time, static_cast<uint32_t>(this->beams.size()), static_cast<uint32_t>(beams.size())});
+    this->beams.insert(this->beams.end(), beams.begin(), beams.end());
+  }
+  std::size_t nav_at_begin = 0, pings_before_begin = 99;
+  bool reference_at_begin = false;
+  std::vector<Ping> pings;
+  std::vector<Beam> beams;
+};
+
+TEST_F(BundleTest, StreamingHandsOnEveryPingAfterBothNavigations) {
+  const Survey original = tiny_survey();
+  RecordingSink sink;
+  const BundleReadResult result = stream_bundle(dir_, sink);
+  ASSERT_TRUE(result.survey);
+  EXPECT_EQ(sink.nav_at_begin, original.nav.size()) << "a submap builder needs the navigation first";
+  EXPECT_TRUE(sink.reference_at_begin) << "and the reference, for each submap's reference pose";
+  EXPECT_EQ(sink.pings_before_begin, 0u);
+  EXPECT_TRUE(result.survey->pings.empty());
+  EXPECT_TRUE(result.survey->beams.empty());
+  EXPECT_EQ(result.survey->nav.size(), original.nav.size());
+  ASSERT_EQ(sink.pings.size(), original.pings.size());
+  for (std::size_t p = 0; p < original.pings.size(); ++p) {
+    EXPECT_EQ(sink.pings[p].time, original.pings[p].time);
+    ASSERT_EQ(sink.pings[p].beam_count, original.pings[p].beam_count);
+    for (uint32_t b = 0; b < original.pings[p].beam_count; ++b) {
+      const Beam& got = sink.beams[sink.pings[p].first_beam + b];
+      const Beam& want = original.beams[original.pings[p].first_beam + b];
+      EXPECT_EQ(got.index, want.index);
+      EXPECT_EQ(got.along, want.along);
+      EXPECT_EQ(got.across, want.across);
+      EXPECT_EQ(got.down, want.down);
+    }
+  }
+}
+
+TEST_F(BundleTest, StreamingABundleWithAnErrorGivesNoSurvey) {
+  replace_line(kPingsFile, 8, "1720000001.5,4,0,nan,9.877");
+  RecordingSink sink;
+  const BundleReadResult result = stream_bundle(dir_, sink);
+  EXPECT_FALSE(result.survey) << "the caller must discard what the sink made";
+  EXPECT_EQ(sink.pings.size(), 3u) << "the error is in the last ping: the others went on";
+  ASSERT_EQ(result.problems.size(), 1u);
+  EXPECT_THAT(result.problems[0].to_string(), HasSubstr("pings.csv:8: across: not finite: 'nan'"));
+}
+
 }  // namespace
 }  // namespace bathyslam

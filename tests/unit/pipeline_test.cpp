@@ -6,10 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <optional>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "core/io/bundle.h"
 #include "core/pipeline/corrected_navigation.h"
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/report.h"
@@ -126,20 +129,47 @@ TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
 
 // A caller done with the soundings gets the same result with the beams freed once the submaps
 // hold them, and keeps the navigation and pings the corrected navigation needs.
-TEST(Pipeline, FreeingTheBeamsChangesNoResult) {
-  PipelineConfig config = preset_config(Configuration::kGicp);
-  Survey survey = small_survey();
-  const PipelineResult kept = run_pipeline(survey, config);
-  const PipelineResult freed = run_pipeline_freeing_beams(survey, config);
-  EXPECT_TRUE(survey.beams.empty());
-  EXPECT_EQ(survey.beams.capacity(), 0u) << "their memory went too";
-  EXPECT_EQ(survey.nav.size(), small_survey().nav.size());
-  EXPECT_EQ(survey.pings.size(), small_survey().pings.size());
-  ASSERT_EQ(freed.optimized_poses.size(), kept.optimized_poses.size());
-  for (std::size_t i = 0; i < kept.optimized_poses.size(); ++i) {
-    EXPECT_TRUE(freed.optimized_poses[i].isApprox(kept.optimized_poses[i], 1e-12)) << "submap " << i;
+// `bathyslam process` streams a bundle's pings into submaps and runs the pipeline on those.
+class SubmapsOfPings : public PingSink {
+ public:
+  void begin(const Survey& survey) override { builder_.emplace(survey.nav, survey.reference_nav); }
+  void ping(double time, std::span<const Beam> beams) override { builder_->add_ping(time, beams); }
+  SubmapSet submaps() { return builder_->finish(); }
+
+ private:
+  std::optional<SubmapBuilder> builder_;
+};
+
+TEST(Pipeline, ABundleStreamedIntoSubmapsGivesTheSameResult) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bathyslam_pipeline_streamed";
+  std::filesystem::remove_all(dir);
+  write_bundle(small_survey(), dir);
+  SubmapsOfPings sink;
+  const BundleReadResult read = stream_bundle(dir, sink);
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(read.survey);
+
+  const PipelineConfig config = preset_config(Configuration::kGicp);
+  const PipelineResult whole = run_pipeline(small_survey(), config);
+  const PipelineResult streamed = run_pipeline(sink.submaps(), 7.0, config);
+  ASSERT_EQ(streamed.submaps.submaps.size(), whole.submaps.submaps.size());
+  for (std::size_t i = 0; i < whole.submaps.submaps.size(); ++i) {
+    const Submap& a = whole.submaps.submaps[i];
+    const Submap& b = streamed.submaps.submaps[i];
+    ASSERT_EQ(a.points.size(), b.points.size()) << "submap " << i;
+    EXPECT_EQ(a.line, b.line);
+    EXPECT_EQ(a.reference_pose.has_value(), b.reference_pose.has_value());
+    // The bundle keeps every value exactly, so georeferencing gives the same floats.
+    EXPECT_TRUE(a.points == b.points) << "submap " << i;
   }
-  EXPECT_EQ(corrected_navigation(survey, freed).size(), corrected_navigation(small_survey(), kept).size());
+  ASSERT_EQ(streamed.optimized_poses.size(), whole.optimized_poses.size());
+  for (std::size_t i = 0; i < whole.optimized_poses.size(); ++i) {
+    EXPECT_TRUE(streamed.optimized_poses[i].isApprox(whole.optimized_poses[i], 1e-12)) << "submap " << i;
+  }
+  EXPECT_EQ(corrected_navigation(*read.survey, streamed).size(), small_survey().nav.size());
+  ASSERT_FALSE(streamed.timings.empty());
+  EXPECT_EQ(streamed.timings.front().stage, "submaps");
+  EXPECT_GE(streamed.timings.front().seconds, 7.0) << "the time the caller took to build them";
 }
 
 class MchsPipeline : public testing::Test {
