@@ -1,5 +1,7 @@
 #include "core/graph/pose_graph.h"
 
+#include <algorithm>
+
 #include <ceres/ceres.h>
 
 #include "core/graph/relative_pose_error.h"
@@ -92,7 +94,7 @@ std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& 
 }
 
 GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
-                                  const std::vector<PoseGraphEdge>& edges, const GraphConfig& config) {
+                                  const std::vector<PoseGraphEdge>& edges, const GraphConfig& config, int first_free) {
   std::vector<Node> nodes(initial.size());
   for (std::size_t i = 0; i < initial.size(); ++i) {
     nodes[i].head<3>() = initial[i].translation();
@@ -110,13 +112,20 @@ GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
   }
   GraphSolution solution;
   solution.poses = initial;
-  if (initial.empty() || !problem.HasParameterBlock(nodes[0].data())) {
-    delete node_manifold;  // never handed to the problem
+  // The first pose anchors the map: it is shared with the reference (docs/design.md, evaluation).
+  // With `first_free`, the poses before it anchor it together.
+  bool anchored = false;
+  const int held = std::min<int>(std::max(first_free, 1), static_cast<int>(nodes.size()));
+  for (int i = 0; i < held; ++i) {
+    if (!problem.HasParameterBlock(nodes[i].data())) continue;
+    problem.SetParameterBlockConstant(nodes[i].data());
+    anchored = true;
+  }
+  if (!anchored) {
+    if (problem.NumParameterBlocks() == 0) delete node_manifold;  // never handed to the problem
     solution.converged = true;
     return solution;
   }
-  // The first pose anchors the map: it is shared with the reference (docs/design.md, evaluation).
-  problem.SetParameterBlockConstant(nodes[0].data());
 
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

@@ -87,8 +87,11 @@ Eigen::Matrix<double, 6, 1> edge_error(const PoseGraphEdge& edge, const Eigen::I
 Eigen::Matrix<double, 6, 1> whitened_residual(const PoseGraphEdge& edge, const Eigen::Isometry3d& from,
                                               const Eigen::Isometry3d& to);
 
-// Optimises `initial` (node poses in the map frame) under `edges`, with node 0 held fixed.
+// Optimises `initial` (node poses in the map frame) under `edges`, with node 0 held fixed, and
+// every node before `first_free` too. Nothing moves when none of the held nodes is in an edge
+// (nothing would fix the map's place).
 GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
-                                  const std::vector<PoseGraphEdge>& edges, const GraphConfig& config = {});
+                                  const std::vector<PoseGraphEdge>& edges, const GraphConfig& config = {},
+                                  int first_free = 1);
 
 }  // namespace bathyslam

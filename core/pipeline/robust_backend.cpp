@@ -1,5 +1,7 @@
 #include "core/pipeline/robust_backend.h"
 
+#include <algorithm>
+
 #include "core/types/format.h"
 
 namespace bathyslam {
@@ -76,12 +78,15 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
 }
 
 GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
-                    const GraphConfig& config, int nodes) {
+                    const GraphConfig& config, int nodes, int first_free) {
   std::vector<PoseGraphEdge> edges;
   for (const Constraint& c : constraints) {
-    if (c.in_graph() && c.from < nodes && c.to < nodes) edges.push_back(edge_of(c));
+    // An edge between two held nodes adds a constant to the cost.
+    if (c.in_graph() && c.from < nodes && c.to < nodes && std::max(c.from, c.to) >= first_free) {
+      edges.push_back(edge_of(c));
+    }
   }
-  return optimize_pose_graph(initial, edges, config);
+  return optimize_pose_graph(initial, edges, config, first_free);
 }
 
 void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {

@@ -24,9 +24,9 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
 
 // The graph of the constraints in it, solved from `initial` (dead reckoning, or a batch's
 // estimate). With `nodes`, only the constraints among the first `nodes` poses; the others keep
-// `initial`.
+// `initial`. With `first_free`, the poses before it are held at `initial` too.
 GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
-                    const GraphConfig& config, int nodes = std::numeric_limits<int>::max());
+                    const GraphConfig& config, int nodes = std::numeric_limits<int>::max(), int first_free = 1);
 
 // Solves, then tests the solution (graph_check.h): while a line's odometry residuals fail the
 // chi-square test or a registration pulls beyond `max_pull_sigma`, the hardest-pulling

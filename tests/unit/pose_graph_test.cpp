@@ -52,6 +52,35 @@ TEST(PoseGraph, RecoversAKnownTrajectoryFromDriftingOdometryAndCrossEdges) {
   EXPECT_TRUE(solution.poses[0].isApprox(truth[0])) << "the first pose is fixed";
 }
 
+// A solve over a window: the poses before `first_free` stay exactly where they were, the edges
+// into the window anchor it, and the window still moves to meet a cross edge.
+TEST(PoseGraph, PosesBeforeTheFirstFreeOneAreHeld) {
+  std::vector<Eigen::Isometry3d> truth, dr;
+  for (int i = 0; i < 10; ++i) truth.push_back(pose(20.0 * i, 0, 0));
+  const GraphConfig config;
+  const Information6 dr_info = information_from_sigmas(config.dr_sigma_translation_m, config.dr_sigma_rotation_rad);
+  std::vector<PoseGraphEdge> edges;
+  dr.push_back(truth[0]);
+  for (int i = 1; i < 10; ++i) {
+    const Eigen::Isometry3d rel = truth[i - 1].inverse() * truth[i] * Eigen::Translation3d(0.5, 0.4, 0);  // drifts
+    edges.push_back({i - 1, i, rel, dr_info, false});
+    dr.push_back(dr.back() * rel);
+  }
+  const Information6 cross_info = information_from_sigmas({0.05, 0.05, 0.05}, {0.002, 0.002, 0.002});
+  edges.push_back({2, 8, truth[2].inverse() * truth[8], cross_info, true});
+
+  const GraphSolution whole = optimize_pose_graph(dr, edges, config);
+  const GraphSolution window = optimize_pose_graph(dr, edges, config, 5);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_TRUE(window.poses[i].isApprox(dr[i], 1e-12)) << "pose " << i << " is held";
+  }
+  EXPECT_FALSE(whole.poses[4].isApprox(dr[4], 1e-3)) << "unheld, the cross edge moves it";
+  // The cross edge still places pose 8 relative to pose 2, which now cannot move.
+  const Eigen::Vector3d wanted = (dr[2] * (truth[2].inverse() * truth[8])).translation();
+  EXPECT_LT((window.poses[8].translation() - wanted).norm(), 0.2);
+  EXPECT_GT((dr[8].translation() - wanted).norm(), 2.0) << "the test needs drift";
+}
+
 // A registration 30 m to the side whose yaw is 1 degree off but which puts the overlap exactly
 // where it is: compared at the overlap (the anchor), the loose yaw does not move the pose.
 TEST(PoseGraph, AnAnchoredEdgeComparesTranslationAtItsAnchor) {
