@@ -43,7 +43,7 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
                 const std::vector<NavSample>& corrected) {
   const std::filesystem::path out(o.out);
   if (!gsf::is_gsf_path(o.survey.inputs.front())) {
-    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile);
+    const std::uint64_t pings = write_corrected_gsf(o.survey.inputs.front(), survey, result, out / kCorrectedGsfFile);
     std::printf("%s: %llu pings with the corrected navigation\n", kCorrectedGsfFile, static_cast<unsigned long long>(pings));
     return;
   }
@@ -56,8 +56,9 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
   }
 }
 
-// The pings as they are read, into submaps and the swaths the map's cell size needs: without
-// --export-gsf nothing reads a sounding again, so they need not be held (README "Performance").
+// The pings as they are read, into submaps and the swaths the map's cell size needs: nothing
+// else reads the soundings but --export-gsf, which reads the input again, so they are never
+// held whole (README "Performance").
 class SubmapsFromPings : public PingSink {
  public:
   explicit SubmapsFromPings(const SubmapConfig& config) : config_(config) {}
@@ -81,19 +82,10 @@ void run_process(const ProcessOptions& o) {
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  Survey survey;
-  SubmapSet submaps;
-  SweptArea swept;
-  if (o.export_gsf) {
-    survey = load_survey(o.survey.input()).survey;
-    submaps = build_submaps(survey, config.submaps);
-    swept = swept_area(survey);
-  } else {
-    SubmapsFromPings sink(config.submaps);
-    survey = load_survey(o.survey.input(), sink).survey;
-    submaps = sink.submaps();
-    swept = swept_area(survey.nav, sink.swaths());
-  }
+  SubmapsFromPings sink(config.submaps);
+  const Survey survey = load_survey(o.survey.input(), sink).survey;  // without its soundings
+  SubmapSet submaps = sink.submaps();
+  const SweptArea swept = swept_area(survey.nav, sink.swaths());
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   FuseConfig fuse = o.fuse;
   if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(swept, fuse.min_soundings);

@@ -15,4 +15,9 @@ inline constexpr const char* kCorrectedGsfFile = "corrected.gsf";
 // Returns how many pings were written (pings outside the corrected navigation are left out).
 std::uint64_t write_corrected_gsf(const Survey& survey, const PipelineResult& result, const std::filesystem::path& path);
 
+// The same for a survey read from `bundle` without its soundings (load_survey with a sink):
+// the pings are streamed from the bundle again. Throws when the bundle no longer reads.
+std::uint64_t write_corrected_gsf(const std::filesystem::path& bundle, const Survey& survey, const PipelineResult& result,
+                                  const std::filesystem::path& path);
+
 }  // namespace bathyslam

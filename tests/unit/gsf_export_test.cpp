@@ -5,13 +5,17 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include "core/fuse/fuse.h"
 #include "core/fuse/soundings_csv.h"
+#include "core/io/bundle.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
+#include "core/products/corrected_gsf.h"
 #include "core/sim/simulator.h"
 
 namespace bathyslam {
@@ -95,6 +99,30 @@ TEST_F(GsfExport, CorrectedGsfPlacesSoundingsWhereTheFusedMapHasThem) {
   gsf::write_survey(survey, corrected_navigation(survey, *result_), path);
   expect_slam_map_from(path, "corrected.gsf");
   fs::remove(path);
+}
+
+// `process` reads a bundle without holding its soundings, and writes the corrected GSF by
+// streaming the bundle again: the same file as from the survey held whole.
+TEST_F(GsfExport, ACorrectedGsfStreamedFromTheBundleIsTheSameFile) {
+  const Survey& survey = simulation_->survey;
+  const fs::path bundle = temp("bundle"), whole = temp("whole.gsf"), streamed = temp("streamed.gsf");
+  write_bundle(survey, bundle);
+  Survey without_soundings = survey;
+  without_soundings.pings.clear();
+  without_soundings.beams.clear();
+  const std::uint64_t n_whole = write_corrected_gsf(survey, *result_, whole);
+  const std::uint64_t n_streamed = write_corrected_gsf(bundle, without_soundings, *result_, streamed);
+  EXPECT_EQ(n_whole, survey.pings.size());
+  EXPECT_EQ(n_streamed, n_whole);
+  auto bytes = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  EXPECT_GT(bytes(whole).size(), 1000000u);
+  EXPECT_TRUE(bytes(whole) == bytes(streamed)) << "the files differ";
+  fs::remove_all(bundle);
+  fs::remove(whole);
+  fs::remove(streamed);
 }
 
 // GSF in, GSF out: the survey as a GSF file with dead reckoning, then that file with the

@@ -299,12 +299,26 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   return out;
 }
 
-std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& nav, const std::filesystem::path& path) {
-  const GeographicProjection projection(survey.metadata.crs);
-  Writer writer(path);
-  const double first_time = survey.pings.empty() ? 0.0 : survey.pings.front().time;
-  writer.write(Comment{first_time, "bathyslam survey '" + survey.metadata.name + "', navigation in " +
-                                       survey.metadata.crs + " written back as WGS 84"});
+SurveyWriter::SurveyWriter(const std::filesystem::path& path, std::vector<NavSample> nav)
+    : nav_(std::move(nav)), writer_(std::make_unique<Writer>(path)) {}
+
+SurveyWriter::~SurveyWriter() = default;
+
+void SurveyWriter::begin(const Survey& survey) {
+  projection_ = std::make_unique<GeographicProjection>(survey.metadata.crs);
+  comment_ = "bathyslam survey '" + survey.metadata.name + "', navigation in " + survey.metadata.crs +
+             " written back as WGS 84";
+}
+
+void SurveyWriter::write_comment(double time) {
+  writer_->write(Comment{time, comment_});
+  commented_ = true;
+}
+
+void SurveyWriter::ping(double time, std::span<const Beam> beams) {
+  if (!commented_) write_comment(time);
+  const std::optional<NavSample> at = interpolate_nav(nav_, time);
+  if (!at) return;
   // The ping header's fields are coarse (1e-7 deg of position, 0.01 deg, 1 cm of vehicle depth),
   // the beam arrays fine (0.1 mm). Each beam is written relative to the ping as stored, its
   // rounding included, so that reading back puts every sounding where it was to the arrays'
@@ -312,45 +326,51 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
   // rounding is taken out in the rotation into the level frame, the position's and the vehicle
   // depth's in the offsets.
   auto centi = [](double deg) { return std::round(deg * 100.0) / 100.0; };
-  for (const bathyslam::Ping& sp : survey.pings) {
-    const std::optional<NavSample> at = interpolate_nav(nav, sp.time);
-    if (!at) continue;
-    const auto beams = survey.beams_of(sp);
-    Ping p;
-    p.time = sp.time;
-    const auto ll = projection.inverse(at->easting, at->northing);
-    p.longitude_deg = std::round(ll.longitude_deg * 1e7) / 1e7;  // the field's resolution
-    p.latitude_deg = std::round(ll.latitude_deg * 1e7) / 1e7;
-    p.heading_deg = heading_field(at->heading_deg) / 100.0;
-    p.course_deg = p.heading_deg;
-    p.pitch_deg = centi(at->pitch_deg);
-    p.roll_deg = centi(at->roll_deg);
-    p.depth_corrector_m = centi(at->depth_m);
-    std::uint32_t n = 0;
-    for (const Beam& b : beams) n = std::max(n, b.index + 1);
-    p.num_beams = static_cast<int>(n);
-    p.center_beam = p.num_beams / 2;
-    p.depth_m.assign(n, 0.0);
-    p.across_m.assign(n, 0.0);
-    p.along_m.assign(n, 0.0);
-    p.beam_flags.assign(n, 1);  // beams the survey does not have are marked unusable
-    const Eigen::Matrix3d vehicle_to_level = yaw(p.heading_deg).transpose() * yaw(at->heading_deg) *
-                                             tilt(at->roll_deg, at->pitch_deg);
-    // From the stored position to the true one (north, east, down), in the level frame.
-    const auto stored = projection.forward(p.longitude_deg, p.latitude_deg);
-    const Eigen::Vector3d position_rounding =
-        yaw(p.heading_deg).transpose() * Eigen::Vector3d(at->northing - stored.northing, at->easting - stored.easting, 0);
-    for (const Beam& b : beams) {
-      const Eigen::Vector3d level = vehicle_to_level * Eigen::Vector3d(b.along, b.across, b.down) + position_rounding;
-      p.along_m[b.index] = level.x();
-      p.across_m[b.index] = level.y();
-      p.depth_m[b.index] = level.z() + at->depth_m;  // the sounding's depth, not the rounded corrector's
-      p.beam_flags[b.index] = 0;
-    }
-    writer.write(p);
+  Ping p;
+  p.time = time;
+  const auto ll = projection_->inverse(at->easting, at->northing);
+  p.longitude_deg = std::round(ll.longitude_deg * 1e7) / 1e7;  // the field's resolution
+  p.latitude_deg = std::round(ll.latitude_deg * 1e7) / 1e7;
+  p.heading_deg = heading_field(at->heading_deg) / 100.0;
+  p.course_deg = p.heading_deg;
+  p.pitch_deg = centi(at->pitch_deg);
+  p.roll_deg = centi(at->roll_deg);
+  p.depth_corrector_m = centi(at->depth_m);
+  std::uint32_t n = 0;
+  for (const Beam& b : beams) n = std::max(n, b.index + 1);
+  p.num_beams = static_cast<int>(n);
+  p.center_beam = p.num_beams / 2;
+  p.depth_m.assign(n, 0.0);
+  p.across_m.assign(n, 0.0);
+  p.along_m.assign(n, 0.0);
+  p.beam_flags.assign(n, 1);  // beams the survey does not have are marked unusable
+  const Eigen::Matrix3d vehicle_to_level = yaw(p.heading_deg).transpose() * yaw(at->heading_deg) *
+                                           tilt(at->roll_deg, at->pitch_deg);
+  // From the stored position to the true one (north, east, down), in the level frame.
+  const auto stored = projection_->forward(p.longitude_deg, p.latitude_deg);
+  const Eigen::Vector3d position_rounding =
+      yaw(p.heading_deg).transpose() * Eigen::Vector3d(at->northing - stored.northing, at->easting - stored.easting, 0);
+  for (const Beam& b : beams) {
+    const Eigen::Vector3d level = vehicle_to_level * Eigen::Vector3d(b.along, b.across, b.down) + position_rounding;
+    p.along_m[b.index] = level.x();
+    p.across_m[b.index] = level.y();
+    p.depth_m[b.index] = level.z() + at->depth_m;  // the sounding's depth, not the rounded corrector's
+    p.beam_flags[b.index] = 0;
   }
-  writer.close();
-  return writer.pings_written();
+  writer_->write(p);
+}
+
+std::uint64_t SurveyWriter::close() {
+  if (!commented_) write_comment(0.0);
+  writer_->close();
+  return writer_->pings_written();
+}
+
+std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& nav, const std::filesystem::path& path) {
+  SurveyWriter writer(path, nav);
+  writer.begin(survey);
+  for (const bathyslam::Ping& ping : survey.pings) writer.ping(ping.time, survey.beams_of(ping));
+  return writer.close();
 }
 
 std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files) {

@@ -9,13 +9,17 @@
 // the GSF file has it. Ignored pings and rejected beams are counted, not kept.
 #include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <span>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/io/bundle.h"
 #include "core/io/byte_source.h"
+#include "core/io/crs.h"
 #include "core/types/survey.h"
 
 namespace bathyslam::gsf {
@@ -74,6 +78,29 @@ FileSummary summarize_file(ByteSource& source, const std::string& file);
 // Pings outside `nav`'s span are left out; returns how many were written.
 std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& nav,
                            const std::filesystem::path& path);
+
+class Writer;
+
+// write_survey a ping at a time, for pings streamed from a bundle (stream_bundle) instead of
+// held: begin() takes the survey's name and CRS, close() finishes the file and returns how many
+// pings it holds. Unclosed, the file is not created.
+class SurveyWriter : public PingSink {
+ public:
+  SurveyWriter(const std::filesystem::path& path, std::vector<NavSample> nav);
+  ~SurveyWriter() override;
+  void begin(const Survey& survey) override;
+  void ping(double time, std::span<const Beam> beams) override;
+  std::uint64_t close();
+
+ private:
+  void write_comment(double time);  // the first record after the header, at the first ping's time
+
+  std::vector<NavSample> nav_;
+  std::unique_ptr<Writer> writer_;
+  std::unique_ptr<GeographicProjection> projection_;
+  std::string comment_;
+  bool commented_ = false;
+};
 
 // Whether `path` names a GSF file (by its extension, as the tools that write it name them).
 bool is_gsf_path(const std::filesystem::path& path);
