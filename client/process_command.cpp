@@ -2,8 +2,6 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
-#include <optional>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -19,6 +17,7 @@
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
+#include "core/pipeline/streamed_survey.h"
 #include "core/products/corrected_gsf.h"
 #include "core/products/map_products.h"
 
@@ -56,36 +55,18 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
   }
 }
 
-// The pings as they are read, into submaps and the swaths the map's cell size needs: nothing
-// else reads the soundings but --export-gsf, which reads the input again, so they are never
-// held whole (README "Performance").
-class SubmapsFromPings : public PingSink {
- public:
-  explicit SubmapsFromPings(const SubmapConfig& config) : config_(config) {}
-  void begin(const Survey& survey) override { builder_.emplace(survey.nav, survey.reference_nav, config_); }
-  void ping(double time, std::span<const Beam> beams) override {
-    builder_->add_ping(time, beams);
-    swaths_.push_back(ping_swath(time, beams));
-  }
-  SubmapSet submaps() { return builder_ ? builder_->finish() : SubmapSet{}; }
-  const std::vector<PingSwath>& swaths() const { return swaths_; }
-
- private:
-  SubmapConfig config_;
-  std::optional<SubmapBuilder> builder_;
-  std::vector<PingSwath> swaths_;
-};
-
 void run_process(const ProcessOptions& o) {
   PipelineConfig config = preset_config(parse_configuration(o.config));
   config.threads = o.threads;
   for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
-  SubmapsFromPings sink(config.submaps);
-  const Survey survey = load_survey(o.survey.input(), sink).survey;  // without its soundings
-  SubmapSet submaps = sink.submaps();
-  const SweptArea swept = swept_area(survey.nav, sink.swaths());
+  // The soundings are never held whole: nothing reads them again but --export-gsf, which reads
+  // the input again (README "Performance").
+  PipelineInputs inputs(config.submaps);
+  const Survey survey = load_survey(o.survey.input(), inputs).survey;  // without its soundings
+  SubmapSet submaps = inputs.take_submaps();
+  const SweptArea swept = inputs.swept_area(survey.nav);
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   FuseConfig fuse = o.fuse;
   if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(swept, fuse.min_soundings);

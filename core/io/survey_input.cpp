@@ -43,11 +43,7 @@ LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
     return {std::move(*read.survey), {}};
   }
   LoadedSurvey loaded = read_gsf(input);
-  Survey& survey = loaded.survey;
-  sink.begin(survey);
-  for (const Ping& ping : survey.pings) sink.ping(ping.time, survey.beams_of(ping));
-  std::vector<Ping>().swap(survey.pings);
-  std::vector<Beam>().swap(survey.beams);
+  hand_pings_to(loaded.survey, sink);
   return loaded;
 }
 

@@ -154,6 +154,7 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
   for (const Submap& s : r.submaps.submaps) r.dr_poses.push_back(s.dr_pose);
   r.constraints = odometry_constraints(r.dr_poses, config.graph);
   clock.done("submaps");
+  report("submaps", 1);
   throw_if_cancelled(cancel);
 
   if (plan.registration) {

@@ -4,11 +4,15 @@
 #include <condition_variable>
 #include <fstream>
 #include <mutex>
+#include <optional>
 
 #include "core/pipeline/pipeline.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
+#include "core/io/gsf/gsf_survey.h"
+#include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/report.h"
+#include "core/pipeline/streamed_survey.h"
 #include "core/products/corrected_gsf.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
@@ -101,13 +105,16 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
   return report;
 }
 
-// The survey's pings with the corrected navigation as GSF in `dir`, when the survey has pings.
-// It stays a file (it can be as large as the upload) until stored chunk by chunk.
-std::optional<std::filesystem::path> corrected_gsf(const Survey& survey, const PipelineResult& result,
-                                                   const std::filesystem::path& dir) {
-  if (survey.pings.empty()) return std::nullopt;
+// The survey's pings with the corrected navigation as GSF in `dir`, streamed from its files
+// again (`survey` was read without its soundings). It stays a file (it can be as large as the
+// upload) until stored chunk by chunk.
+std::filesystem::path corrected_gsf(const storage::StoredSurveyCopy& files, const Survey& survey,
+                                    const PipelineResult& result, const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / kCorrectedGsfFile;
-  write_corrected_gsf(survey, result, path);
+  gsf::SurveyWriter writer(path, corrected_navigation(survey, result));
+  BundleReadResult read = files.read(writer);
+  if (!read.survey) throw BundleError(std::move(read.problems));
+  writer.close();
   return path;
 }
 
@@ -233,23 +240,29 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     const PipelineConfig config = job_config(job, std::max(1, cores / std::max(1, options_.workers)));
     event("load", 0);
-    BundleReadResult bundle = retry_transient(name + ": loading the survey", options_.retry, cancel, [&] {
-      return storage::read_stored_bundle(surveys_, job.survey_id, options_.scratch);
-    });
+    const auto load_start = Clock::now();
+    std::optional<storage::StoredSurveyCopy> files;
+    retry_transient(name + ": loading the survey", options_.retry, cancel,
+                    [&] { files.emplace(surveys_, job.survey_id, options_.scratch); });
+    // The pings go straight into the submaps: the soundings are never held whole.
+    PipelineInputs inputs(config.submaps);
+    BundleReadResult bundle = files->read(inputs);
     if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+    const Survey& survey = *bundle.survey;  // without its soundings
     // The map's cells follow the soundings' density (0.5 m for a vehicle near the seabed).
-    const FuseConfig fuse{.resolution_m = auto_map_resolution(*bundle.survey, FuseConfig{}.min_soundings),
+    const FuseConfig fuse{.resolution_m = auto_map_resolution(inputs.swept_area(survey.nav), FuseConfig{}.min_soundings),
                           .max_cells = options_.max_map_cells};
     // Finalize checked this too; a survey finalized before the limit existed is checked here.
-    if (auto problem = map_extent_problem(*bundle.survey, fuse.resolution_m, options_.max_map_cells))
+    if (auto problem = map_extent_problem(map_extent(survey.nav, inputs.sounding_reach_m(), fuse.resolution_m),
+                                          fuse.resolution_m, options_.max_map_cells))
       throw std::runtime_error(problem->to_string());
-    event("load", 1, std::to_string(bundle.survey->pings.size()) + " pings");
+    event("load", 1, std::to_string(inputs.pings()) + " pings");
 
     // Progress: every stage change, and within a stage at most every `progress_every`.
     std::string last_stage;
     auto last_event = Clock::now();
     const PipelineResult result = run_pipeline(
-        *bundle.survey, config,
+        inputs.take_submaps(), seconds_since(load_start), config,
         [&](std::string_view stage, double fraction) {
           if (stage == "done") return;  // the job is done once its results are stored
           if (stage == last_stage && fraction < 1 && Clock::now() - last_event < options_.progress_every) return;
@@ -260,10 +273,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     event("map", 0, "fusing and tiling");
-    const MapProducts map = make_map_products(result, bundle.survey->metadata, fuse, options_.scratch);
+    const MapProducts map = make_map_products(result, survey.metadata, fuse, options_.scratch);
     event("map", 0.5, "writing the corrected GSF");
     const ScratchDir gsf_dir(options_.scratch, "gsf");
-    const auto gsf = corrected_gsf(*bundle.survey, result, gsf_dir.path());
+    std::optional<std::filesystem::path> gsf;
+    if (inputs.pings() > 0) gsf = corrected_gsf(*files, survey, result, gsf_dir.path());
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });

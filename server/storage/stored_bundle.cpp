@@ -50,26 +50,45 @@ BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesyst
 
 }  // namespace
 
-BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root) {
-  server::ScratchDir scratch(scratch_root, "bundle");
+StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)
+    : scratch_(scratch_root, "bundle") {
   for (const UploadState& upload : store.uploads(survey_id)) {
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
-    std::ofstream out(scratch.path() / upload.name, std::ios::binary);
+    std::ofstream out(scratch_.path() / upload.name, std::ios::binary);
     store.export_file(survey_id, upload.name, out);
   }
-  bool gsf_upload = false;
-  for (const UploadState& upload : store.uploads(survey_id)) gsf_upload = gsf_upload || gsf::is_gsf_path(upload.name);
-  if (gsf_upload) {
-    const std::optional<SurveyRecord> record = store.survey(survey_id);
+  for (const UploadState& upload : store.uploads(survey_id)) gsf_ = gsf_ || gsf::is_gsf_path(upload.name);
+  if (gsf_) {
+    std::optional<SurveyRecord> record = store.survey(survey_id);
     if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");
-    return read_gsf_survey(*record, scratch.path());
+    record_ = std::move(*record);
   }
-  BundleReadResult result = read_bundle(scratch.path());
-  // The reader names the folder of a missing file; the scratch folder means nothing to a user.
-  const std::string where = " from " + scratch.path().string();
+}
+
+BundleReadResult StoredSurveyCopy::read() const {
+  if (gsf_) return read_gsf_survey(record_, scratch_.path());
+  return named_as_upload(read_bundle(scratch_.path()));
+}
+
+BundleReadResult StoredSurveyCopy::read(PingSink& sink) const {
+  if (gsf_) {
+    BundleReadResult result = read_gsf_survey(record_, scratch_.path());
+    if (result.survey) hand_pings_to(*result.survey, sink);
+    return result;
+  }
+  return named_as_upload(stream_bundle(scratch_.path(), sink));
+}
+
+// The reader names the folder of a missing file; the scratch folder means nothing to a user.
+BundleReadResult StoredSurveyCopy::named_as_upload(BundleReadResult result) const {
+  const std::string where = " from " + scratch_.path().string();
   for (Problem& problem : result.problems)
     if (auto at = problem.message.find(where); at != std::string::npos) problem.message.replace(at, where.size(), " from the upload");
   return result;
+}
+
+BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root) {
+  return StoredSurveyCopy(store, survey_id, scratch_root).read();
 }
 
 }  // namespace bathyslam::storage

@@ -1,11 +1,12 @@
 #pragma once
 // A survey's uploaded files read as a bundle: copied into a scratch folder (streamed chunk by
 // chunk, checksums verified) so that core's bundle reader parses them exactly as it parses a
-// bundle on disk, then the copy is removed.
+// bundle on disk, the copy removed when done.
 #include <cstdint>
 #include <filesystem>
 
 #include "core/io/bundle.h"
+#include "server/scratch_dir.h"
 #include "server/storage/survey_store.h"
 
 namespace bathyslam::storage {
@@ -14,8 +15,30 @@ namespace bathyslam::storage {
 // optional reference_nav.csv; others are refused at upload.
 bool is_bundle_file(const std::string& name);
 
-// Reads the survey's complete bundle files (missing ones are reported as problems by the
-// reader, with the file name and no scratch path), or its GSF files when it has any.
+// A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
+// that they can be read more than once: a job streams the pings into its submaps, then again
+// into the corrected GSF, never holding the soundings whole.
+class StoredSurveyCopy {
+ public:
+  // Throws what the store throws (a transient database error may be retried).
+  StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
+
+  // The bundle (missing files are reported as problems by the reader, with the file name and no
+  // scratch path), or the GSF files when the survey has any.
+  BundleReadResult read() const;
+  // The same handing the pings to `sink`; the survey comes back without them. A bundle streams;
+  // GSF files are read whole, then handed on.
+  BundleReadResult read(PingSink& sink) const;
+
+ private:
+  BundleReadResult named_as_upload(BundleReadResult result) const;
+
+  server::ScratchDir scratch_;
+  bool gsf_ = false;
+  SurveyRecord record_;  // GSF uploads: name, CRS, sonar and vehicle from CreateSurvey
+};
+
+// StoredSurveyCopy's read(), for a caller that reads once.
 BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
 
 }  // namespace bathyslam::storage

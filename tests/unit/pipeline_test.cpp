@@ -7,13 +7,13 @@
 
 #include <cmath>
 #include <filesystem>
-#include <optional>
 #include <mutex>
 #include <set>
 #include <thread>
 
 #include "core/io/bundle.h"
 #include "core/pipeline/corrected_navigation.h"
+#include "core/pipeline/streamed_survey.h"
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/report.h"
 #include "core/sim/simulator.h"
@@ -129,29 +129,26 @@ TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
 
 // A caller done with the soundings gets the same result with the beams freed once the submaps
 // hold them, and keeps the navigation and pings the corrected navigation needs.
-// `bathyslam process` streams a bundle's pings into submaps and runs the pipeline on those.
-class SubmapsOfPings : public PingSink {
- public:
-  void begin(const Survey& survey) override { builder_.emplace(survey.nav, survey.reference_nav); }
-  void ping(double time, std::span<const Beam> beams) override { builder_->add_ping(time, beams); }
-  SubmapSet submaps() { return builder_->finish(); }
-
- private:
-  std::optional<SubmapBuilder> builder_;
-};
-
 TEST(Pipeline, ABundleStreamedIntoSubmapsGivesTheSameResult) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bathyslam_pipeline_streamed";
   std::filesystem::remove_all(dir);
   write_bundle(small_survey(), dir);
-  SubmapsOfPings sink;
-  const BundleReadResult read = stream_bundle(dir, sink);
+  const PipelineConfig config = preset_config(Configuration::kGicp);
+  PipelineInputs inputs(config.submaps);
+  const BundleReadResult read = stream_bundle(dir, inputs);
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(read.survey);
+  EXPECT_TRUE(read.survey->beams.empty());
+  // What the map's cell size and extent need, as from the survey held whole.
+  const SweptArea swept = inputs.swept_area(read.survey->nav), whole_swept = swept_area(small_survey());
+  EXPECT_EQ(swept.soundings, whole_swept.soundings);
+  EXPECT_EQ(swept.swath_m, whole_swept.swath_m);
+  EXPECT_EQ(swept.track_m, whole_swept.track_m);
+  EXPECT_EQ(inputs.sounding_reach_m(), sounding_reach_m(small_survey().beams));
+  EXPECT_GT(inputs.sounding_reach_m(), 10.0);
 
-  const PipelineConfig config = preset_config(Configuration::kGicp);
   const PipelineResult whole = run_pipeline(small_survey(), config);
-  const PipelineResult streamed = run_pipeline(sink.submaps(), 7.0, config);
+  const PipelineResult streamed = run_pipeline(inputs.take_submaps(), 7.0, config);
   ASSERT_EQ(streamed.submaps.submaps.size(), whole.submaps.submaps.size());
   for (std::size_t i = 0; i < whole.submaps.submaps.size(); ++i) {
     const Submap& a = whole.submaps.submaps[i];
