@@ -127,8 +127,9 @@ TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
   EXPECT_LT(r.consistency.stats.rmse, r.dr_consistency.stats.rmse);
 }
 
-// A caller done with the soundings gets the same result with the beams freed once the submaps
-// hold them, and keeps the navigation and pings the corrected navigation needs.
+// `bathyslam process` and the service's jobs stream a bundle's pings into the submaps (and what
+// the map's cell size and extent need) without holding the soundings: the same result as from
+// the survey held whole, and the "submaps" stage timed from when the caller began.
 TEST(Pipeline, ABundleStreamedIntoSubmapsGivesTheSameResult) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bathyslam_pipeline_streamed";
   std::filesystem::remove_all(dir);
