@@ -248,7 +248,8 @@ int main(int argc, char** argv) {
   app.add_option("--dev-tenant", o.dev_tenant, "callers without a token act as this tenant (created if needed)")
       ->envname("BATHYSLAM_DEV_TENANT");
   app.add_flag("--reflection", o.reflection, "serve gRPC reflection without a dev tenant too (to callers with a token)");
-  app.add_option("--scratch", o.scratch, "folder for bundle copies while parsing (default: a temporary one)");
+  app.add_option("--scratch", o.scratch,
+                 "folder for survey copies while a job or a validation reads them (default: a temporary one)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));
   app.add_option("--tls-cert", o.tls_cert, "PEM certificate (chain): serve TLS")->envname("BATHYSLAM_TLS_CERT");
