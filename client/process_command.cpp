@@ -66,7 +66,7 @@ void run_process(const ProcessOptions& o) {
   PipelineInputs inputs(config.submaps);
   const Survey survey = load_survey(o.survey.input(), inputs).survey;  // without its soundings
   SubmapSet submaps = inputs.take_submaps();
-  const SweptArea swept = inputs.swept_area(survey.nav);
+  const SweptArea swept = inputs.outlines().swept_area(survey.nav);
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   FuseConfig fuse = o.fuse;
   if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(swept, fuse.min_soundings);

@@ -1,8 +1,7 @@
 #pragma once
-// What the pipeline and the map need of a survey's pings, made as a reader hands them on
-// (bundle.h's PingSink), so that the soundings are never held whole (README "Performance"): the
-// submaps, each ping's swath (the map's cell size) and how far from the vehicle a sounding lands
-// (the map's extent).
+// What the pipeline, the map and a survey's summary need of its pings, made as a reader hands
+// them on (bundle.h's PingSink), so that the soundings are never held whole (README
+// "Performance").
 #include <optional>
 #include <span>
 #include <vector>
@@ -14,6 +13,26 @@
 
 namespace bathyslam {
 
+// Each ping's swath (the map's cell size), how far from the vehicle a sounding lands (the map's
+// extent), and each ping's time and sounding count (a survey's summary).
+class PingOutlines : public PingSink {
+ public:
+  void begin(const Survey&) override {}
+  void ping(double time, std::span<const Beam> beams) override;
+
+  SweptArea swept_area(const std::vector<NavSample>& nav) const;
+  double sounding_reach_m() const { return reach_m_; }
+  std::size_t pings() const { return swaths_.size(); }
+  // The pings with their sounding counts but no beams to point at, as a survey summarized
+  // without its soundings holds them (summarize() counts; nothing may call beams_of()).
+  std::vector<Ping> pings_without_beams() const;
+
+ private:
+  std::vector<PingSwath> swaths_;
+  double reach_m_ = 0;
+};
+
+// The submaps beside the outlines: what a job needs.
 class PipelineInputs : public PingSink {
  public:
   explicit PipelineInputs(const SubmapConfig& config) : config_(config) {}
@@ -21,15 +40,12 @@ class PipelineInputs : public PingSink {
   void ping(double time, std::span<const Beam> beams) override;
 
   SubmapSet take_submaps();  // once, after the last ping
-  SweptArea swept_area(const std::vector<NavSample>& nav) const;
-  double sounding_reach_m() const { return reach_m_; }
-  std::size_t pings() const { return swaths_.size(); }
+  const PingOutlines& outlines() const { return outlines_; }
 
  private:
   SubmapConfig config_;
   std::optional<SubmapBuilder> builder_;
-  std::vector<PingSwath> swaths_;
-  double reach_m_ = 0;
+  PingOutlines outlines_;
 };
 
 }  // namespace bathyslam

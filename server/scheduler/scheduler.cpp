@@ -250,13 +250,13 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     if (!bundle.survey) throw BundleError(std::move(bundle.problems));
     const Survey& survey = *bundle.survey;  // without its soundings
     // The map's cells follow the soundings' density (0.5 m for a vehicle near the seabed).
-    const FuseConfig fuse{.resolution_m = auto_map_resolution(inputs.swept_area(survey.nav), FuseConfig{}.min_soundings),
+    const FuseConfig fuse{.resolution_m = auto_map_resolution(inputs.outlines().swept_area(survey.nav), FuseConfig{}.min_soundings),
                           .max_cells = options_.max_map_cells};
     // Finalize checked this too; a survey finalized before the limit existed is checked here.
-    if (auto problem = map_extent_problem(map_extent(survey.nav, inputs.sounding_reach_m(), fuse.resolution_m),
+    if (auto problem = map_extent_problem(map_extent(survey.nav, inputs.outlines().sounding_reach_m(), fuse.resolution_m),
                                           fuse.resolution_m, options_.max_map_cells))
       throw std::runtime_error(problem->to_string());
-    event("load", 1, std::to_string(inputs.pings()) + " pings");
+    event("load", 1, std::to_string(inputs.outlines().pings()) + " pings");
 
     // Progress: every stage change, and within a stage at most every `progress_every`.
     std::string last_stage;
@@ -277,7 +277,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     event("map", 0.5, "writing the corrected GSF");
     const ScratchDir gsf_dir(options_.scratch, "gsf");
     std::optional<std::filesystem::path> gsf;
-    if (inputs.pings() > 0) gsf = corrected_gsf(*files, survey, result, gsf_dir.path());
+    if (inputs.outlines().pings() > 0) gsf = corrected_gsf(*files, survey, result, gsf_dir.path());
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });

@@ -5,6 +5,7 @@
 #include "core/fuse/map_resolution.h"
 #include "core/io/bounded_json.h"
 #include "core/io/crs.h"
+#include "core/pipeline/streamed_survey.h"
 #include "core/summary/survey_summary.h"
 #include "server/log.h"
 #include "server/storage/stored_bundle.h"
@@ -219,7 +220,9 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
                                       std::to_string(upload.size_bytes) + " bytes"}));
       errors = true;
     }
-    BundleReadResult bundle = storage::read_stored_bundle(context_.surveys, survey.id, scratch_);
+    // Read as a job reads it, the pings streamed: only their outlines are kept, never the soundings.
+    PingOutlines outlines;
+    BundleReadResult bundle = storage::StoredSurveyCopy(context_.surveys, survey.id, scratch_).read(outlines);
     for (const Problem& problem : bundle.problems) {
       problems.push_back(to_json(problem));
       errors = errors || problem.severity == Problem::Severity::kError;
@@ -230,14 +233,18 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
       errors = true;
     }
     if (bundle.survey) {
-      if (auto problem = map_extent_problem(*bundle.survey, auto_map_resolution(*bundle.survey, FuseConfig{}.min_soundings),
-                                                context_.limits.max_map_cells)) {
+      const double resolution = auto_map_resolution(outlines.swept_area(bundle.survey->nav), FuseConfig{}.min_soundings);
+      if (auto problem = map_extent_problem(map_extent(bundle.survey->nav, outlines.sounding_reach_m(), resolution),
+                                            resolution, context_.limits.max_map_cells)) {
         problems.push_back(to_json(*problem));
         errors = true;
       }
     }
     storage::Validation validation{!errors, problems, nullptr};
-    if (!errors && bundle.survey) validation.summary = to_json(summarize(*bundle.survey));
+    if (!errors && bundle.survey) {
+      bundle.survey->pings = outlines.pings_without_beams();
+      validation.summary = to_json(summarize(*bundle.survey));
+    }
     if (!context_.surveys.save_validation_if_unchanged(survey.id, validation, uploads))
       throw Refusal(grpc::StatusCode::ABORTED, "survey " + std::to_string(survey.id) +
                                                    ": its files changed while it was validated; finalize it again");

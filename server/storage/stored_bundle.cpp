@@ -65,11 +65,6 @@ StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, c
   }
 }
 
-BundleReadResult StoredSurveyCopy::read() const {
-  if (gsf_) return read_gsf_survey(record_, scratch_.path());
-  return named_as_upload(read_bundle(scratch_.path()));
-}
-
 BundleReadResult StoredSurveyCopy::read(PingSink& sink) const {
   if (gsf_) {
     BundleReadResult result = read_gsf_survey(record_, scratch_.path());
@@ -85,10 +80,6 @@ BundleReadResult StoredSurveyCopy::named_as_upload(BundleReadResult result) cons
   for (Problem& problem : result.problems)
     if (auto at = problem.message.find(where); at != std::string::npos) problem.message.replace(at, where.size(), " from the upload");
   return result;
-}
-
-BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root) {
-  return StoredSurveyCopy(store, survey_id, scratch_root).read();
 }
 
 }  // namespace bathyslam::storage

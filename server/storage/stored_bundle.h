@@ -17,17 +17,15 @@ bool is_bundle_file(const std::string& name);
 
 // A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
 // that they can be read more than once: a job streams the pings into its submaps, then again
-// into the corrected GSF, never holding the soundings whole.
+// into the corrected GSF, never holding the soundings whole; a validation streams them once.
 class StoredSurveyCopy {
  public:
   // Throws what the store throws (a transient database error may be retried).
   StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
 
   // The bundle (missing files are reported as problems by the reader, with the file name and no
-  // scratch path), or the GSF files when the survey has any.
-  BundleReadResult read() const;
-  // The same handing the pings to `sink`; the survey comes back without them. A bundle streams;
-  // GSF files are read whole, then handed on.
+  // scratch path), or the GSF files when the survey has any, its pings handed to `sink`: the
+  // survey comes back without them. A bundle streams; GSF files are read whole, then handed on.
   BundleReadResult read(PingSink& sink) const;
 
  private:
@@ -38,7 +36,5 @@ class StoredSurveyCopy {
   SurveyRecord record_;  // GSF uploads: name, CRS, sonar and vehicle from CreateSurvey
 };
 
-// StoredSurveyCopy's read(), for a caller that reads once.
-BundleReadResult read_stored_bundle(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
 
 }  // namespace bathyslam::storage

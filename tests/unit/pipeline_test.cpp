@@ -17,6 +17,7 @@
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/report.h"
 #include "core/sim/simulator.h"
+#include "core/summary/survey_summary.h"
 
 namespace bathyslam {
 namespace {
@@ -141,12 +142,20 @@ TEST(Pipeline, ABundleStreamedIntoSubmapsGivesTheSameResult) {
   ASSERT_TRUE(read.survey);
   EXPECT_TRUE(read.survey->beams.empty());
   // What the map's cell size and extent need, as from the survey held whole.
-  const SweptArea swept = inputs.swept_area(read.survey->nav), whole_swept = swept_area(small_survey());
+  const SweptArea swept = inputs.outlines().swept_area(read.survey->nav), whole_swept = swept_area(small_survey());
   EXPECT_EQ(swept.soundings, whole_swept.soundings);
   EXPECT_EQ(swept.swath_m, whole_swept.swath_m);
   EXPECT_EQ(swept.track_m, whole_swept.track_m);
-  EXPECT_EQ(inputs.sounding_reach_m(), sounding_reach_m(small_survey().beams));
-  EXPECT_GT(inputs.sounding_reach_m(), 10.0);
+  EXPECT_EQ(inputs.outlines().sounding_reach_m(), sounding_reach_m(small_survey().beams));
+  EXPECT_GT(inputs.outlines().sounding_reach_m(), 10.0);
+  // And what a survey's summary counts (FinalizeSurvey summarizes a streamed upload).
+  Survey outlined = *read.survey;
+  outlined.pings = inputs.outlines().pings_without_beams();
+  const SurveySummary summary = summarize(outlined), whole_summary = summarize(small_survey());
+  EXPECT_EQ(summary.pings, whole_summary.pings);
+  EXPECT_EQ(summary.soundings, whole_summary.soundings);
+  EXPECT_EQ(summary.time_begin, whole_summary.time_begin);
+  EXPECT_EQ(summary.time_end, whole_summary.time_end);
 
   const PipelineResult whole = run_pipeline(small_survey(), config);
   const PipelineResult streamed = run_pipeline(inputs.take_submaps(), 7.0, config);
