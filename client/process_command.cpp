@@ -42,7 +42,9 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
                 const std::vector<NavSample>& corrected) {
   const std::filesystem::path out(o.out);
   if (!gsf::is_gsf_path(o.survey.inputs.front())) {
-    const std::uint64_t pings = write_corrected_gsf(o.survey.inputs.front(), survey, result, out / kCorrectedGsfFile);
+    const std::filesystem::path bundle = o.survey.inputs.front();
+    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile,
+                                                    [&](PingSink& sink) { return stream_bundle(bundle, sink); });
     std::printf("%s: %llu pings with the corrected navigation\n", kCorrectedGsfFile, static_cast<unsigned long long>(pings));
     return;
   }

@@ -30,20 +30,12 @@ MapExtent map_extent(const std::vector<NavSample>& nav, double reach_m, double r
   return extent;
 }
 
-MapExtent survey_map_extent(const Survey& survey, double resolution_m) {
-  return map_extent(survey.nav, sounding_reach_m(survey.beams), resolution_m);
-}
-
 std::optional<Problem> map_extent_problem(const MapExtent& extent, double resolution_m, std::uint64_t max_cells) {
   if (extent.cells <= max_cells) return std::nullopt;
   return Problem{Problem::Severity::kError, "nav.csv", 0, "easting, northing",
                  format("the survey covers %.0f m × %.0f m: a map of %llu cells at %g m, over the limit of %llu",
                         extent.width_m, extent.height_m, static_cast<unsigned long long>(extent.cells), resolution_m,
                         static_cast<unsigned long long>(max_cells))};
-}
-
-std::optional<Problem> map_extent_problem(const Survey& survey, double resolution_m, std::uint64_t max_cells) {
-  return map_extent_problem(survey_map_extent(survey, resolution_m), resolution_m, max_cells);
 }
 
 }  // namespace bathyslam

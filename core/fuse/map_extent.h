@@ -23,10 +23,8 @@ double sounding_reach_m(std::span<const Beam> beams);
 
 // The extent of a survey with navigation `nav` whose soundings land up to `reach_m` from it.
 MapExtent map_extent(const std::vector<NavSample>& nav, double reach_m, double resolution_m);
-MapExtent survey_map_extent(const Survey& survey, double resolution_m);
 
 // An error naming nav.csv's easting and northing when the map would need more than `max_cells`.
 std::optional<Problem> map_extent_problem(const MapExtent& extent, double resolution_m, std::uint64_t max_cells);
-std::optional<Problem> map_extent_problem(const Survey& survey, double resolution_m, std::uint64_t max_cells);
 
 }  // namespace bathyslam

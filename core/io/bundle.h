@@ -3,7 +3,6 @@
 // nav.csv, pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
 // only when there is no error; every problem names its file, line and field.
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -42,13 +41,12 @@ struct TimeSpan {
   double end = 0;
 };
 
-// A ping as a reader hands it on: its time and its beams, valid during the call only.
-using PingFn = std::function<void(double time, std::span<const Beam> beams)>;
+class PingSink;
 
-// Hands each ping of `source` to `on_ping` in file order, its beams as far as they parsed. With
+// Hands each ping of `source` to `sink.ping` in file order, its beams as far as they parsed. With
 // `nav_span`, pings outside it are reported as one warning (the sync stage drops them).
 void stream_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
-                      ProblemList& problems, const PingFn& on_ping);
+                      ProblemList& problems, PingSink& sink);
 
 // stream_pings_csv appending the pings and beams to `pings`/`beams`.
 void parse_pings_csv(ByteSource& source, std::string_view file,
@@ -72,6 +70,7 @@ class PingSink {
   // Before the first ping: the survey read so far, its metadata, navigation and reference
   // navigation (possibly with errors already: the pings are read on to report theirs).
   virtual void begin(const Survey& survey) = 0;
+  // A ping's time and its beams, valid during the call only.
   virtual void ping(double time, std::span<const Beam> beams) = 0;
 };
 

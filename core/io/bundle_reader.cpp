@@ -172,7 +172,7 @@ std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
 }
 
 void stream_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
-                      ProblemList& problems, const PingFn& on_ping) {
+                      ProblemList& problems, PingSink& sink) {
   static constexpr std::array<std::string_view, 5> kColumns = {"time", "beam", "along", "across",
                                                                "down"};
   const std::size_t errors_before = problems.error_count();
@@ -204,7 +204,7 @@ void stream_pings_csv(ByteSource& source, std::string_view file, const std::opti
       }
       time_text.assign(fields[0]);
       if (!in_ping || t != time) {
-        if (in_ping) on_ping(time, ping_beams);
+        if (in_ping) sink.ping(time, ping_beams);
         ping_beams.clear();
         time = t;
         in_ping = true;
@@ -235,7 +235,7 @@ void stream_pings_csv(ByteSource& source, std::string_view file, const std::opti
     ping_beams.push_back(beam);
     ++soundings;
   }
-  if (in_ping) on_ping(time, ping_beams);
+  if (in_ping) sink.ping(time, ping_beams);
   if (pings == 0 && problems.error_count() == errors_before) {
     problems.error(std::string(file), 0, "", "no pings");
   }
@@ -250,32 +250,27 @@ void stream_pings_csv(ByteSource& source, std::string_view file, const std::opti
 
 namespace {
 
-void append_ping(double time, std::span<const Beam> ping_beams, std::vector<Ping>& pings, std::vector<Beam>& beams) {
-  pings.push_back({time, static_cast<uint32_t>(beams.size()), static_cast<uint32_t>(ping_beams.size())});
-  beams.insert(beams.end(), ping_beams.begin(), ping_beams.end());
-}
-
-// read_bundle's sink: the pings and beams, for the survey they came with.
+// The pings and beams appended to a survey's vectors.
 class SurveyPings : public PingSink {
  public:
+  SurveyPings(std::vector<Ping>& pings, std::vector<Beam>& beams) : pings_(pings), beams_(beams) {}
   void begin(const Survey&) override {}
-  void ping(double time, std::span<const Beam> beams) override { append_ping(time, beams, pings_, beams_); }
-  void move_into(Survey& survey) {
-    survey.pings = std::move(pings_);
-    survey.beams = std::move(beams_);
+  void ping(double time, std::span<const Beam> beams) override {
+    pings_.push_back({time, static_cast<uint32_t>(beams_.size()), static_cast<uint32_t>(beams.size())});
+    beams_.insert(beams_.end(), beams.begin(), beams.end());
   }
 
  private:
-  std::vector<Ping> pings_;
-  std::vector<Beam> beams_;
+  std::vector<Ping>& pings_;
+  std::vector<Beam>& beams_;
 };
 
 }  // namespace
 
 void parse_pings_csv(ByteSource& source, std::string_view file, const std::optional<TimeSpan>& nav_span,
                      ProblemList& problems, std::vector<Ping>& pings, std::vector<Beam>& beams) {
-  stream_pings_csv(source, file, nav_span, problems,
-                   [&](double time, std::span<const Beam> ping_beams) { append_ping(time, ping_beams, pings, beams); });
+  SurveyPings sink(pings, beams);
+  stream_pings_csv(source, file, nav_span, problems, sink);
 }
 
 BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& sink) {
@@ -322,8 +317,7 @@ BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& si
   }
   if (auto pings = open(kPingsFile, true)) {
     sink.begin(survey);
-    const PingFn on_ping = [&](double time, std::span<const Beam> beams) { sink.ping(time, beams); };
-    guarded(kPingsFile, [&] { stream_pings_csv(*pings, kPingsFile, nav_span, problems, on_ping); });
+    guarded(kPingsFile, [&] { stream_pings_csv(*pings, kPingsFile, nav_span, problems, sink); });
   }
 
   BundleReadResult result;
@@ -340,9 +334,14 @@ void hand_pings_to(Survey& survey, PingSink& sink) {
 }
 
 BundleReadResult read_bundle(const std::filesystem::path& bundle) {
-  SurveyPings sink;
+  std::vector<Ping> pings;
+  std::vector<Beam> beams;
+  SurveyPings sink(pings, beams);
   BundleReadResult result = stream_bundle(bundle, sink);
-  if (result.survey) sink.move_into(*result.survey);
+  if (result.survey) {
+    result.survey->pings = std::move(pings);
+    result.survey->beams = std::move(beams);
+  }
   return result;
 }
 

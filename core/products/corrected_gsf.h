@@ -5,19 +5,20 @@
 // writer knows; `process` keeps every record of GSF input instead, file by file).
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 
+#include "core/io/bundle.h"
 #include "core/pipeline/pipeline.h"
 
 namespace bathyslam {
 
 inline constexpr const char* kCorrectedGsfFile = "corrected.gsf";
 
+// The pings that `read_pings` hands on (the survey's files read again: `survey` was read
+// without its soundings), with the corrected navigation. `read_pings` is stream_bundle for a
+// bundle, or the service's stored copy; a survey that no longer reads throws BundleError.
 // Returns how many pings were written (pings outside the corrected navigation are left out).
-std::uint64_t write_corrected_gsf(const Survey& survey, const PipelineResult& result, const std::filesystem::path& path);
-
-// The same for a survey read from `bundle` without its soundings (load_survey with a sink):
-// the pings are streamed from the bundle again. Throws when the bundle no longer reads.
-std::uint64_t write_corrected_gsf(const std::filesystem::path& bundle, const Survey& survey, const PipelineResult& result,
-                                  const std::filesystem::path& path);
+std::uint64_t write_corrected_gsf(const Survey& survey, const PipelineResult& result, const std::filesystem::path& path,
+                                  const std::function<BundleReadResult(PingSink&)>& read_pings);
 
 }  // namespace bathyslam

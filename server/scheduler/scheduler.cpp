@@ -9,8 +9,6 @@
 #include "core/pipeline/pipeline.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
-#include "core/io/gsf/gsf_survey.h"
-#include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/report.h"
 #include "core/pipeline/streamed_survey.h"
 #include "core/products/corrected_gsf.h"
@@ -103,19 +101,6 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
         storage::Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
   return report;
-}
-
-// The survey's pings with the corrected navigation as GSF in `dir`, streamed from its files
-// again (`survey` was read without its soundings). It stays a file (it can be as large as the
-// upload) until stored chunk by chunk.
-std::filesystem::path corrected_gsf(const storage::StoredSurveyCopy& files, const Survey& survey,
-                                    const PipelineResult& result, const std::filesystem::path& dir) {
-  const std::filesystem::path path = dir / kCorrectedGsfFile;
-  gsf::SurveyWriter writer(path, corrected_navigation(survey, result));
-  BundleReadResult read = files.read(writer);
-  if (!read.survey) throw BundleError(std::move(read.problems));
-  writer.close();
-  return path;
 }
 
 }  // namespace
@@ -276,8 +261,12 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const MapProducts map = make_map_products(result, survey.metadata, fuse, options_.scratch);
     event("map", 0.5, "writing the corrected GSF");
     const ScratchDir gsf_dir(options_.scratch, "gsf");
+    // The corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
     std::optional<std::filesystem::path> gsf;
-    if (inputs.outlines().pings() > 0) gsf = corrected_gsf(*files, survey, result, gsf_dir.path());
+    if (inputs.outlines().pings() > 0) {
+      gsf = gsf_dir.path() / kCorrectedGsfFile;
+      write_corrected_gsf(survey, result, *gsf, [&](PingSink& sink) { return files->read(sink); });
+    }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });

@@ -53,11 +53,11 @@ BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesyst
 StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)
     : scratch_(scratch_root, "bundle") {
   for (const UploadState& upload : store.uploads(survey_id)) {
+    gsf_ = gsf_ || gsf::is_gsf_path(upload.name);
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
     std::ofstream out(scratch_.path() / upload.name, std::ios::binary);
     store.export_file(survey_id, upload.name, out);
   }
-  for (const UploadState& upload : store.uploads(survey_id)) gsf_ = gsf_ || gsf::is_gsf_path(upload.name);
   if (gsf_) {
     std::optional<SurveyRecord> record = store.survey(survey_id);
     if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");

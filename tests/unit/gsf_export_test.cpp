@@ -110,8 +110,9 @@ TEST_F(GsfExport, ACorrectedGsfStreamedFromTheBundleIsTheSameFile) {
   Survey without_soundings = survey;
   without_soundings.pings.clear();
   without_soundings.beams.clear();
-  const std::uint64_t n_whole = write_corrected_gsf(survey, *result_, whole);
-  const std::uint64_t n_streamed = write_corrected_gsf(bundle, without_soundings, *result_, streamed);
+  const std::uint64_t n_whole = gsf::write_survey(survey, corrected_navigation(survey, *result_), whole);
+  const std::uint64_t n_streamed = write_corrected_gsf(without_soundings, *result_, streamed,
+                                                       [&](PingSink& sink) { return stream_bundle(bundle, sink); });
   EXPECT_EQ(n_whole, survey.pings.size());
   EXPECT_EQ(n_streamed, n_whole);
   auto bytes = [](const fs::path& path) {
