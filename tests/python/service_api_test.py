@@ -3,6 +3,7 @@
 bathyslam-server and a real PostgreSQL (the ctest `pg` cluster), stubs generated from the
 same protos with grpc_python_plugin. Environment (set by ctest): BATHYSLAM_SERVER_BIN,
 BATHYSLAM_TEST_PG, PG_SH, PROTO_DIR, SMALL_BUNDLE (a simulated `small` bundle)."""
+import atexit
 import hashlib
 import os
 import re
@@ -18,6 +19,9 @@ import grpc
 HERE = os.path.dirname(os.path.abspath(__file__))
 ENV = os.environ
 STUBS = tempfile.mkdtemp(prefix="bathyslam-py-")
+# The stubs, the servers' logs and their scratch folders go when the tests end: a server a test
+# kills cannot remove its own scratch (a job's copy of its survey, tens of megabytes).
+atexit.register(shutil.rmtree, STUBS, ignore_errors=True)
 subprocess.run(["protoc", "-I", ENV["PROTO_DIR"], "-I", HERE, "--python_out", STUBS, "--grpc_python_out", STUBS,
                 "--plugin=protoc-gen-grpc_python=/usr/bin/grpc_python_plugin",
                 "bathyslam/v1/common.proto", "bathyslam/v1/survey.proto", "bathyslam/v1/job.proto",
@@ -88,8 +92,9 @@ class Server:
     def start(self):
         """A server process on this database (again, after halt())."""
         workers = [] if "--workers" in self.args else ["--workers", "1"]
+        scratch = [] if "--scratch" in self.args else ["--scratch", os.path.join(STUBS, f"{self.db}_scratch")]
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
-                                         *workers, *self.args], stdout=subprocess.PIPE,
+                                         *workers, *scratch, *self.args], stdout=subprocess.PIPE,
                                         stderr=self.log, text=True)
         line = self.process.stdout.readline()
         match = re.search(r"listening on (\S+)", line)
