@@ -74,10 +74,6 @@ class PingSink {
   virtual void ping(double time, std::span<const Beam> beams) = 0;
 };
 
-// A survey held whole handed to `sink` ping by ping, as stream_bundle would; its pings and beams
-// are freed then (for readers that cannot stream, such as GSF's).
-void hand_pings_to(Survey& survey, PingSink& sink);
-
 // read_bundle handing the pings to `sink` as they are read: the survey comes back without pings
 // and beams. A bundle with errors comes back without a survey as from read_bundle, but the sink
 // has seen pings by then: the caller discards what it made of them.

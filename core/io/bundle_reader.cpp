@@ -326,13 +326,6 @@ BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& si
   return result;
 }
 
-void hand_pings_to(Survey& survey, PingSink& sink) {
-  sink.begin(survey);
-  for (const Ping& ping : survey.pings) sink.ping(ping.time, survey.beams_of(ping));
-  std::vector<Ping>().swap(survey.pings);
-  std::vector<Beam>().swap(survey.beams);
-}
-
 BundleReadResult read_bundle(const std::filesystem::path& bundle) {
   std::vector<Ping> pings;
   std::vector<Beam> beams;

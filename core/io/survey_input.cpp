@@ -42,8 +42,12 @@ LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
     if (!read.survey) throw BundleError(std::move(read.problems));
     return {std::move(*read.survey), {}};
   }
-  LoadedSurvey loaded = read_gsf(input);
-  hand_pings_to(loaded.survey, sink);
+  // GSF holds the navigation in the pings: a first reading without the soundings gives it (and
+  // every error), a second hands the soundings on.
+  SurveyInput navigation_only = input;
+  navigation_only.keep_soundings = false;
+  LoadedSurvey loaded = read_gsf(navigation_only);
+  gsf::stream_soundings(input.paths, loaded.survey, sink);
   return loaded;
 }
 

@@ -24,19 +24,22 @@ namespace {
 
 // GSF uploads: the .gsf files in the time order of their first pings, reference_nav.csv when
 // uploaded; name, CRS (empty: the data's UTM zone), sonar and vehicle from CreateSurvey. A
-// damaged file is one problem naming the file, record and byte.
-BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesystem::path& dir) {
+// damaged file is one problem naming the file, record and byte. The pings go to `sink` (the
+// files read twice, the soundings never held whole) and the survey comes back without them.
+BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesystem::path& dir, PingSink& sink) {
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     if (gsf::is_gsf_path(entry.path())) files.push_back(entry.path());
-  gsf::ReadOptions options{record.crs, std::nullopt};
+  gsf::ReadOptions options{record.crs, std::nullopt, false};
   if (std::filesystem::exists(dir / kReferenceNavFile)) options.reference_nav = dir / kReferenceNavFile;
   BundleReadResult result;
   try {
-    Survey survey = gsf::read_survey(gsf::in_time_order(std::move(files)), options).survey;
+    files = gsf::in_time_order(std::move(files));
+    Survey survey = gsf::read_survey(files, options).survey;
     survey.metadata.name = record.name;
     if (!record.sonar.empty()) survey.metadata.sonar["declared"] = record.sonar;
     survey.metadata.vehicle = record.vehicle;
+    gsf::stream_soundings(files, survey, sink);
     result.survey = std::move(survey);
   } catch (const std::exception& e) {
     // Paths in the message are the scratch copy's; the file names are the upload's.
@@ -66,11 +69,7 @@ StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, c
 }
 
 BundleReadResult StoredSurveyCopy::read(PingSink& sink) const {
-  if (gsf_) {
-    BundleReadResult result = read_gsf_survey(record_, scratch_.path());
-    if (result.survey) hand_pings_to(*result.survey, sink);
-    return result;
-  }
+  if (gsf_) return read_gsf_survey(record_, scratch_.path(), sink);
   return named_as_upload(stream_bundle(scratch_.path(), sink));
 }
 

@@ -25,7 +25,8 @@ class StoredSurveyCopy {
 
   // The bundle (missing files are reported as problems by the reader, with the file name and no
   // scratch path), or the GSF files when the survey has any, its pings handed to `sink`: the
-  // survey comes back without them. A bundle streams; GSF files are read whole, then handed on.
+  // survey comes back without them. Neither is held whole: a bundle streams, GSF files are read
+  // twice (the navigation and every error, then the soundings).
   BundleReadResult read(PingSink& sink) const;
 
  private:

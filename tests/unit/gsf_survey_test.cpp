@@ -82,6 +82,58 @@ TEST(GsfSurvey, ASurveyReadWithoutSoundingsCountsThem) {
   EXPECT_EQ(to_json(summarize(counted)), to_json(summarize(full)));
 }
 
+// Keeps what it is handed, as a survey read whole holds it.
+class KeptPings : public PingSink {
+ public:
+  std::size_t nav_at_begin = 0;
+  std::vector<bathyslam::Ping> pings;
+  std::vector<Beam> beams;
+  void begin(const Survey& survey) override { nav_at_begin = survey.nav.size(); }
+  void ping(double time, std::span<const Beam> b) override {
+    pings.push_back({time, static_cast<std::uint32_t>(beams.size()), static_cast<std::uint32_t>(b.size())});
+    beams.insert(beams.end(), b.begin(), b.end());
+  }
+};
+
+// How a job reads GSF: the navigation first, then the soundings ping by ping, never all held.
+TEST(GsfSurvey, StreamedSoundingsAreThoseOfTheSurveyReadWhole) {
+  const std::vector<fs::path> files{kGsfpy, kEx1811};
+  const Survey whole = read_survey(files).survey;
+  Survey survey = read_survey(files, {"", std::nullopt, false}).survey;
+  KeptPings kept;
+  stream_soundings(files, survey, kept);
+  EXPECT_TRUE(survey.pings.empty());
+  EXPECT_EQ(survey.nav.size(), whole.nav.size());
+  EXPECT_EQ(kept.nav_at_begin, whole.nav.size());
+  ASSERT_EQ(kept.pings.size(), whole.pings.size());
+  ASSERT_EQ(kept.beams.size(), whole.beams.size());
+  ASSERT_GT(kept.beams.size(), 10000u);
+  for (std::size_t i = 0; i < whole.pings.size(); ++i) {
+    EXPECT_EQ(kept.pings[i].time, whole.pings[i].time);
+    EXPECT_EQ(kept.pings[i].beam_count, whole.pings[i].beam_count);
+  }
+  for (std::size_t i = 0; i < whole.beams.size(); ++i) {
+    ASSERT_EQ(kept.beams[i].index, whole.beams[i].index) << i;
+    ASSERT_EQ(kept.beams[i].along, whole.beams[i].along) << i;
+    ASSERT_EQ(kept.beams[i].across, whole.beams[i].across) << i;
+    ASSERT_EQ(kept.beams[i].down, whole.beams[i].down) << i;
+  }
+}
+
+TEST(GsfSurvey, StreamingFilesOtherThanThoseReadFirstIsRefused) {
+  Survey survey = read_survey({kGsfpy, kEx1811}, {"", std::nullopt, false}).survey;
+  KeptPings kept;
+  try {
+    stream_soundings({kEx1811}, survey, kept);
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("changed while it was read"));
+  }
+  EXPECT_TRUE(kept.pings.empty());
+  Survey shorter = read_survey({kGsfpy}, {"", std::nullopt, false}).survey;
+  EXPECT_THROW(stream_soundings({kGsfpy, kEx1811}, shorter, kept), std::runtime_error);
+}
+
 TEST(GsfSurvey, FilesOutOfTimeOrderAreRefused) {
   EXPECT_EQ(read_survey({kGsfpy, kEx1811}).survey.pings.size(), 54u);  // 2015, then 2018
   try {

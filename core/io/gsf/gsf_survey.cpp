@@ -45,6 +45,24 @@ bool usable_beam(const Ping& ping, std::size_t beam) {
 
 double along_of(const Ping& ping, std::size_t beam) { return ping.along_m.empty() ? 0.0 : ping.along_m[beam]; }
 
+// The usable soundings of a usable ping, in the vehicle frame, appended to `beams`.
+void append_soundings(const Ping& p, std::vector<Beam>& beams) {
+  const Eigen::Matrix3d level_to_vehicle = tilt(p.roll_deg, p.pitch_deg).transpose();
+  for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) {
+    if (!usable_beam(p, b)) continue;
+    const Eigen::Vector3d level(along_of(p, b), p.across_m[b], p.depth_m[b] - p.depth_corrector_m);
+    const Eigen::Vector3d v = level_to_vehicle * level;
+    beams.push_back({static_cast<std::uint32_t>(b), static_cast<float>(v.x()), static_cast<float>(v.y()),
+                     static_cast<float>(v.z())});
+  }
+}
+
+std::uint32_t usable_soundings(const Ping& p) {
+  std::uint32_t n = 0;
+  for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) n += usable_beam(p, b) ? 1 : 0;
+  return n;
+}
+
 // Collects a file's summary record by record.
 class SummaryBuilder {
  public:
@@ -139,16 +157,12 @@ class SurveyBuilder {
                              p.heading_deg});
     }
     if (p.ignored()) return;
-    const Eigen::Matrix3d level_to_vehicle = tilt(p.roll_deg, p.pitch_deg).transpose();
     bathyslam::Ping ping{p.time, static_cast<std::uint32_t>(survey_.beams.size()), 0};
-    for (std::size_t b = 0; b < static_cast<std::size_t>(p.num_beams); ++b) {
-      if (!usable_beam(p, b)) continue;
-      ++ping.beam_count;
-      if (!keep_soundings_) continue;
-      const Eigen::Vector3d level(along_of(p, b), p.across_m[b], p.depth_m[b] - p.depth_corrector_m);
-      const Eigen::Vector3d v = level_to_vehicle * level;
-      survey_.beams.push_back({static_cast<std::uint32_t>(b), static_cast<float>(v.x()), static_cast<float>(v.y()),
-                               static_cast<float>(v.z())});
+    if (keep_soundings_) {
+      append_soundings(p, survey_.beams);
+      ping.beam_count = static_cast<std::uint32_t>(survey_.beams.size()) - ping.first_beam;
+    } else {
+      ping.beam_count = usable_soundings(p);
     }
     if (ping.beam_count > 0) survey_.pings.push_back(ping);
   }
@@ -297,6 +311,33 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
     out.survey.reference_nav = std::move(reference);
   }
   return out;
+}
+
+void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& survey, PingSink& sink) {
+  sink.begin(survey);
+  std::vector<Beam> beams;
+  std::size_t next = 0;  // the ping of `survey` the files' next usable ping must be
+  for (const std::filesystem::path& path : files) {
+    FileSource source(path);
+    Reader reader(source, path.string());
+    while (const auto record = reader.next()) {
+      const auto* p = std::get_if<Ping>(&*record);
+      if (p == nullptr || p->ignored()) continue;
+      beams.clear();
+      append_soundings(*p, beams);
+      if (beams.empty()) continue;
+      if (next == survey.pings.size() || survey.pings[next].time != p->time ||
+          survey.pings[next].beam_count != beams.size()) {
+        throw std::runtime_error(path.string() + ": record " + std::to_string(reader.records_read()) +
+                                 ": the file changed while it was read");
+      }
+      sink.ping(p->time, beams);
+      ++next;
+    }
+  }
+  if (next != survey.pings.size()) throw std::runtime_error(files.back().string() + ": the file changed while it was read");
+  std::vector<bathyslam::Ping>().swap(survey.pings);
+  std::vector<Beam>().swap(survey.beams);
 }
 
 SurveyWriter::SurveyWriter(const std::filesystem::path& path, std::vector<NavSample> nav)

@@ -66,6 +66,13 @@ struct SurveyRead {
 // std::runtime_error for pings out of time order or an unusable CRS.
 SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const ReadOptions& options = {});
 
+// The soundings of `files` handed to `sink` ping by ping as the files are read again, never held
+// whole: `survey` is what read_survey made of the same files without soundings (keep_soundings
+// false), so every error has been found before the sink sees a ping, and its metadata is what
+// the sink is to see. Its pings are checked against the files' (a file that changed in between
+// throws std::runtime_error) and freed: it comes back as stream_bundle's does.
+void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& survey, PingSink& sink);
+
 // `files` ordered by the time of their first ping (files without a ping last, by name), for
 // files whose order nobody gave (a service upload). Reads each file up to its first ping.
 std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files);
