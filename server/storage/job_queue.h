@@ -41,9 +41,11 @@ struct Lease {
   int attempt = 0;
 };
 
-// True when `lease` is still held, and then the job's row is locked (FOR SHARE) until the
-// caller's transaction ends: no reaper, cancel or final state can take the lease away before the
-// writes of that transaction commit. Call it inside a transaction.
+// True when `lease` is still held, and then the job's row is locked (FOR KEY SHARE) until the
+// caller's transaction ends: no reaper can take the lease away before the writes of that
+// transaction commit. The holder's heartbeats do not wait for them (a store can take minutes,
+// longer than the lease), nor does a cancel: a cancelled job's writes are never served, and a
+// job's next attempt discards what an earlier one stored. Call it inside a transaction.
 bool hold_lease(Connection& connection, const Lease& lease);
 
 // A write refused because the lease it was made under is no longer held.

@@ -221,6 +221,42 @@ TEST(JobQueue, HeartbeatsKeepALeaseAlivePastItsFirstExpiry) {
   EXPECT_TRUE(queue.succeed(job->lease));
 }
 
+// A worker storing results holds its lease through the transaction (hold_lease). On `large` a
+// store took over a minute: its heartbeats must go on meanwhile, and so must a cancel, while the
+// reaper still cannot take the job from under the store.
+TEST(JobQueue, AStoreHoldingItsLeaseStopsTheReaperButNotHeartbeatsOrACancel) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 3, {.statement_timeout = 3s});
+  JobQueue queue(pool, {.lease = 1s, .poll = 200ms});
+  const std::int64_t survey = a_survey(pool);
+  const std::int64_t stored = queue.enqueue({survey, "mchs"});
+  std::optional<ClaimedJob> job = queue.claim("storing");
+  ASSERT_TRUE(job);
+  {
+    auto storing = pool.acquire();
+    Transaction transaction(*storing);
+    ASSERT_TRUE(hold_lease(*storing, job->lease));
+    const auto begin = Clock::now();
+    EXPECT_TRUE(queue.heartbeat(job->lease));  // under FOR SHARE: waits, then the statement timeout
+    EXPECT_LT(Clock::now() - begin, 2s);
+    std::this_thread::sleep_for(1100ms);  // no heartbeat since: the lease has expired
+    EXPECT_EQ(queue.reap(), 0);           // but the store holds it
+    transaction.commit();
+  }
+  EXPECT_EQ(queue.reap(), 1);  // once stored, an expired lease is reaped as ever
+  EXPECT_EQ(queue.status(stored).state, JobState::kQueued);
+
+  job = queue.claim("storing again");
+  ASSERT_TRUE(job);
+  auto storing = pool.acquire();
+  Transaction transaction(*storing);
+  ASSERT_TRUE(hold_lease(*storing, job->lease));
+  const auto begin = Clock::now();
+  EXPECT_TRUE(queue.cancel(stored));
+  EXPECT_LT(Clock::now() - begin, 2s);
+  EXPECT_FALSE(queue.heartbeat(job->lease));  // the cancel took the lease
+}
+
 TEST(JobQueue, AnEnqueueWakesAnIdleWorkerWithoutWaitingForThePoll) {
   testing::FreshDatabase db;
   ConnectionPool pool(db.conninfo(), 2);
