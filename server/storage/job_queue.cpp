@@ -27,7 +27,7 @@ std::string with_lease(std::string_view head, std::string_view tail = "") {
 bool hold_lease(Connection& connection, const Lease& lease) {
   // KEY SHARE, not SHARE: it conflicts only with the reaper's FOR UPDATE, so the worker's own
   // heartbeats (and a cancel) go on while it stores; under SHARE they waited for the whole
-  // transaction, and storing `large`'s tiles outlasted the 60 s statement timeout.
+  // transaction, and a store of `large`'s results outlasted the 60 s statement timeout.
   return connection.exec("SELECT 1 FROM jobs WHERE " + std::string(kLeaseHeld) + " FOR KEY SHARE",
                          {lease.job_id, lease.worker, lease.attempt})
              .rows() == 1;
