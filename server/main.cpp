@@ -23,6 +23,7 @@
 #include "server/database_health.h"
 #include "server/log.h"
 #include "server/scheduler/scheduler.h"
+#include "server/scratch_dir.h"
 #include "server/services/job_service.h"
 #include "server/services/map_service.h"
 #include "server/services/survey_service.h"
@@ -165,9 +166,13 @@ int serve(const ServeOptions& o) {
   storage::ResultStore results(pool);
   service::ServiceContext context{surveys, jobs, results, o.limits, std::nullopt};
   if (!o.dev_tenant.empty()) context.dev_tenant = tenant_named(pool, surveys, o.dev_tenant);
-  const std::filesystem::path scratch =
-      o.scratch.empty() ? std::filesystem::temp_directory_path() / ("bathyslam-server-" + std::to_string(getpid()))
-                        : std::filesystem::path(o.scratch);
+  const std::filesystem::path scratch = o.scratch.empty()
+                                           ? service::default_scratch_root(std::filesystem::temp_directory_path(), getpid())
+                                           : std::filesystem::path(o.scratch);
+  if (o.scratch.empty()) {
+    if (const int removed = service::remove_dead_servers_scratch(std::filesystem::temp_directory_path()))
+      service::log("removed the scratch folders of %d servers no longer running", removed);
+  }
   service::SurveyService survey_service(context, scratch);
   service::JobEventBell job_event_bell(o.db);
   service::JobService job_service(context, job_event_bell);
@@ -249,7 +254,8 @@ int main(int argc, char** argv) {
       ->envname("BATHYSLAM_DEV_TENANT");
   app.add_flag("--reflection", o.reflection, "serve gRPC reflection without a dev tenant too (to callers with a token)");
   app.add_option("--scratch", o.scratch,
-                 "folder for survey copies while a job or a validation reads them (default: a temporary one)");
+                 "folder for survey copies while a job or a validation reads them (default: $TMPDIR/bathyslam-server-<pid>,\n"
+                 "removed at exit, and by the next server if this one is killed)");
   app.add_option("--lease-seconds", o.lease_seconds, "job lease; a worker that stops renewing loses its job")
       ->capture_default_str()->check(CLI::Range(5, 3600));
   app.add_option("--tls-cert", o.tls_cert, "PEM certificate (chain): serve TLS")->envname("BATHYSLAM_TLS_CERT");

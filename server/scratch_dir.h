@@ -2,6 +2,7 @@
 // A fresh folder for files that core's writers and readers need on disk (bundle copies, map
 // products, plots), removed with everything in it when the ScratchDir goes out of scope.
 #include <filesystem>
+#include <string>
 
 namespace bathyslam::server {
 
@@ -17,5 +18,14 @@ class ScratchDir {
  private:
   std::filesystem::path path_;
 };
+
+// Where a server given no --scratch keeps its scratch folders: "<temp>/bathyslam-server-<pid>".
+std::filesystem::path default_scratch_root(const std::filesystem::path& temp, int pid);
+
+// Removes the default scratch folders under `temp` whose server is no longer running: a server
+// killed with SIGKILL cannot remove its own, and it holds a job's copy of its survey (gigabytes
+// for a large one). Folders of running processes, and those it may not remove, stay. Returns
+// how many it removed.
+int remove_dead_servers_scratch(const std::filesystem::path& temp);
 
 }  // namespace bathyslam::server
