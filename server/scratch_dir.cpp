@@ -49,10 +49,13 @@ std::filesystem::path default_scratch_root(const std::filesystem::path& temp, in
 int remove_dead_servers_scratch(const std::filesystem::path& temp) {
   std::error_code error;
   int removed = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(temp, error)) {
-    const int pid = pid_of(entry.path().filename().string());
-    if (pid <= 0 || running(pid) || !entry.is_directory(error)) continue;
-    if (std::filesystem::remove_all(entry.path(), error) != static_cast<std::uintmax_t>(-1) && !error) ++removed;
+  try {  // a folder that cannot be listed to the end must not stop the server from starting
+    for (const auto& entry : std::filesystem::directory_iterator(temp, error)) {
+      const int pid = pid_of(entry.path().filename().string());
+      if (pid <= 0 || running(pid) || !entry.is_directory(error)) continue;
+      if (std::filesystem::remove_all(entry.path(), error) != static_cast<std::uintmax_t>(-1) && !error) ++removed;
+    }
+  } catch (const std::filesystem::filesystem_error&) {
   }
   return removed;
 }

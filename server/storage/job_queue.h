@@ -44,8 +44,8 @@ struct Lease {
 // True when `lease` is still held, and then the job's row is locked (FOR KEY SHARE) until the
 // caller's transaction ends: no reaper can take the lease away before the writes of that
 // transaction commit. The holder's heartbeats do not wait for them (a store can take minutes,
-// longer than the lease), nor does a cancel: a cancelled job's writes are never served, and a
-// job's next attempt discards what an earlier one stored. Call it inside a transaction.
+// longer than the lease), nor does a cancel: a store in flight then commits just after the
+// cancel instead of just before it, the same rows either way. Call it inside a transaction.
 bool hold_lease(Connection& connection, const Lease& lease);
 
 // A write refused because the lease it was made under is no longer held.
