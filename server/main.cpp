@@ -166,11 +166,11 @@ int serve(const ServeOptions& o) {
   storage::ResultStore results(pool);
   service::ServiceContext context{surveys, jobs, results, o.limits, std::nullopt};
   if (!o.dev_tenant.empty()) context.dev_tenant = tenant_named(pool, surveys, o.dev_tenant);
-  const std::filesystem::path scratch = o.scratch.empty()
-                                           ? service::default_scratch_root(std::filesystem::temp_directory_path(), getpid())
-                                           : std::filesystem::path(o.scratch);
+  const std::filesystem::path temp = std::filesystem::temp_directory_path();
+  const std::filesystem::path scratch =
+      o.scratch.empty() ? service::default_scratch_root(temp, getpid()) : std::filesystem::path(o.scratch);
   if (o.scratch.empty()) {
-    if (const int removed = service::remove_dead_servers_scratch(std::filesystem::temp_directory_path()))
+    if (const int removed = service::remove_dead_servers_scratch(temp))
       service::log("removed the scratch folders of %d servers no longer running", removed);
   }
   service::SurveyService survey_service(context, scratch);

@@ -31,7 +31,7 @@ int pid_of(const std::string& name) {
   if (name.rfind(kDefaultPrefix, 0) != 0 || name.size() == kDefaultPrefix.size()) return 0;
   int pid = 0;
   for (char c : name.substr(kDefaultPrefix.size())) {
-    if (c < '0' || c > '9' || pid > 1'000'000'000) return 0;
+    if (c < '0' || c > '9' || pid > 100'000'000) return 0;  // no overflow below: pids are far smaller
     pid = 10 * pid + (c - '0');
   }
   return pid;

@@ -335,7 +335,10 @@ void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& s
       ++next;
     }
   }
-  if (next != survey.pings.size()) throw std::runtime_error(files.back().string() + ": the file changed while it was read");
+  if (next != survey.pings.size()) {
+    throw std::runtime_error((files.empty() ? std::string("the GSF files") : files.back().string()) +
+                             ": the file changed while it was read");
+  }
   std::vector<bathyslam::Ping>().swap(survey.pings);
   std::vector<Beam>().swap(survey.beams);
 }
