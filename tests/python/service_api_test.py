@@ -87,12 +87,13 @@ class Server:
         if self.owns_db:
             psql(self.admin, f'DROP DATABASE IF EXISTS "{self.db}" WITH (FORCE); CREATE DATABASE "{self.db}";')
         self.log = open(os.path.join(STUBS, f"{self.db}_{Server.count}.log"), "w+")
+        self.scratch = os.path.join(STUBS, f"{self.db}_{Server.count}_scratch")  # its own, as the log
         self.start()
 
     def start(self):
         """A server process on this database (again, after halt())."""
         workers = [] if "--workers" in self.args else ["--workers", "1"]
-        scratch = [] if "--scratch" in self.args else ["--scratch", os.path.join(STUBS, f"{self.db}_scratch")]
+        scratch = [] if "--scratch" in self.args else ["--scratch", self.scratch]
         self.process = subprocess.Popen([ENV["BATHYSLAM_SERVER_BIN"], "--db", self.url, "--migrate", "--listen", "127.0.0.1:0",
                                          *workers, *scratch, *self.args], stdout=subprocess.PIPE,
                                         stderr=self.log, text=True)
