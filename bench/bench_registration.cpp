@@ -122,37 +122,51 @@ void BM_PclGicp(benchmark::State& state) {
 }
 BENCHMARK(BM_PclGicp)->Unit(benchmark::kSecond)->Iterations(1);
 
-// Ours on `threads` threads inside each registration (and each submap's preparation).
-void BM_OwnGicp(benchmark::State& state) {
-  const int threads = static_cast<int>(state.range(0));
+// Ours on `threads` threads inside each registration, registering one sounding in
+// `soundings_per_sample` (gicp_cloud.h; 0: the pipeline's setting).
+Outcome run_own(benchmark::State& state, int threads, double soundings_per_sample) {
   Outcome o;
   for (auto _ : state) {
     o = {};
     std::map<int, std::shared_ptr<const GicpCloud>> prepared;
+    auto config = [&](const Pair& pair) {
+      GicpConfig gicp = pair.coarse.gicp;
+      gicp.engine = 1;
+      gicp.threads = threads;
+      if (soundings_per_sample > 0) gicp.soundings_per_sample = soundings_per_sample;
+      return gicp;
+    };
     for (const Pair& pair : g_input->pairs) {
       for (int submap : {pair.target, pair.source}) {
         if (prepared.count(submap)) continue;
         const Stopwatch watch;
-        prepared[submap] = prepare_gicp_cloud(*g_input->clouds[submap], pair.coarse.gicp.neighbours);
+        prepared[submap] = prepare_gicp_cloud(*g_input->clouds[submap], config(pair));
         o.prepare_seconds += watch.wall_seconds();
         o.prepare_cpu_seconds += watch.cpu_seconds();
       }
     }
     for (const Pair& pair : g_input->pairs) {
-      GicpConfig gicp = pair.coarse.gicp;
-      gicp.engine = 1;
-      gicp.threads = threads;
       const Stopwatch watch;
       const PairRegistration r =
-          register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source], pair.coarse.start, gicp,
-                          g_input->crop_margin_m, false, {prepared[pair.target].get(), prepared[pair.source].get()});
+          register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source], pair.coarse.start,
+                          config(pair), g_input->crop_margin_m, false,
+                          {prepared[pair.target].get(), prepared[pair.source].get()});
       record(o, pair, r, watch);
     }
   }
   counters(state, o);
-  g_outcomes["ours_" + std::to_string(threads)] = o;
+  return o;
+}
+
+void BM_OwnGicp(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  g_outcomes["ours_" + std::to_string(threads)] = run_own(state, threads, 0);
 }
 BENCHMARK(BM_OwnGicp)->Arg(1)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1);
+
+// Ours on one thread registering every sounding, as PCL's does: what the sample buys apart.
+void BM_OwnGicpEverySounding(benchmark::State& state) { g_outcomes["ours_all_1"] = run_own(state, 1, 1); }
+BENCHMARK(BM_OwnGicpEverySounding)->Unit(benchmark::kSecond)->Iterations(1);
 
 // Ours as the pipeline spends its threads: each registration on one thread, the pairs spread
 // over `threads` (register_pairs' parallel_for), submaps prepared on first use as there (the
@@ -162,7 +176,7 @@ void BM_OwnGicpPairsInParallel(benchmark::State& state) {
   Outcome o;
   for (auto _ : state) {
     o = {};
-    GicpCloudCache cache(g_input->clouds, g_input->pairs.front().coarse.gicp.neighbours);
+    GicpCloudCache cache(g_input->clouds, g_input->pairs.front().coarse.gicp);
     std::vector<PairRegistration> results(g_input->pairs.size());
     const Stopwatch watch;
     parallel_for(g_input->pairs.size(), threads, nullptr, [&](std::size_t k) {

@@ -183,7 +183,7 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
     const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {
       return voxel_filter(submaps.submaps[i].points, config.voxel);
     };
-    GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp.neighbours);
+    GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp);
     register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, config, plan, progress, cancel);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) {

@@ -61,8 +61,8 @@ PairRegistration register_direct(const Cloud& target, const Cloud& source, const
                                  const GicpConfig& gicp, double crop_margin_m, bool with_hessian, PreparedPair prepared) {
   if (gicp.engine == 1) {
     std::shared_ptr<const GicpCloud> own_target, own_source;
-    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp.neighbours)).get();
-    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp.neighbours)).get();
+    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp)).get();
+    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp)).get();
     return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian,
                                     prepared.cancel);
   }

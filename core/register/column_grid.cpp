@@ -34,7 +34,7 @@ class NearestSoFar {
 
 }  // namespace
 
-ColumnGrid::ColumnGrid(const std::vector<Eigen::Vector3f>& points) {
+ColumnGrid::ColumnGrid(const std::vector<Eigen::Vector3f>& points, double points_per_column) {
   if (points.empty()) return;
   Eigen::Vector2f lo = points.front().head<2>(), hi = lo;
   for (const Eigen::Vector3f& p : points) {
@@ -42,7 +42,7 @@ ColumnGrid::ColumnGrid(const std::vector<Eigen::Vector3f>& points) {
     hi = hi.cwiseMax(p.head<2>());
   }
   const double area = std::max(static_cast<double>(hi.x() - lo.x()) * (hi.y() - lo.y()), 1e-6);
-  cell_m_ = static_cast<float>(std::max(std::sqrt(kPointsPerColumn * area / static_cast<double>(points.size())), 1e-3));
+  cell_m_ = static_cast<float>(std::max(std::sqrt(points_per_column * area / static_cast<double>(points.size())), 1e-3));
   // A line of points (no width) would ask for one column per millimetre along it: at most 4096
   // columns a side, each point in the column its coordinates fall in (what the search relies on).
   cell_m_ = std::max(cell_m_, std::max(hi.x() - lo.x(), hi.y() - lo.y()) / 4096);
@@ -106,6 +106,24 @@ std::size_t ColumnGrid::nearest_within(const Eigen::Vector3f& query, std::size_t
     }
   }
   return nearest.count();
+}
+
+std::vector<uint32_t> ColumnGrid::central_points(std::vector<uint32_t>* column_points) const {
+  std::vector<uint32_t> central;
+  for (int y = 0; y < columns_y_; ++y) {
+    for (int x = 0; x < columns_x_; ++x) {
+      const std::size_t column = static_cast<std::size_t>(y) * columns_x_ + x;
+      if (first_[column] == first_[column + 1]) continue;
+      const Eigen::Vector2f centre = origin_ + cell_m_ * Eigen::Vector2f(x + 0.5f, y + 0.5f);
+      uint32_t best = first_[column];
+      for (uint32_t s = best + 1; s < first_[column + 1]; ++s) {
+        if ((sorted_[s].head<2>() - centre).squaredNorm() < (sorted_[best].head<2>() - centre).squaredNorm()) best = s;
+      }
+      central.push_back(index_[best]);
+      if (column_points != nullptr) column_points->push_back(first_[column + 1] - first_[column]);
+    }
+  }
+  return central;
 }
 
 std::size_t ColumnGrid::bytes() const {

@@ -17,7 +17,8 @@ namespace bathyslam {
 
 class ColumnGrid {
  public:
-  explicit ColumnGrid(const std::vector<Eigen::Vector3f>& points);
+  // Columns sized to hold `points_per_column` points on average over the points' bounding box.
+  explicit ColumnGrid(const std::vector<Eigen::Vector3f>& points, double points_per_column = kPointsPerColumn);
 
   // The k nearest points with `allowed[index]` set (all points if `allowed` is null) closer
   // than sqrt(max_sq_distance), nearest first; returns how many. Indices are into the points
@@ -25,6 +26,11 @@ class ColumnGrid {
   // the grid of the whole submap. A query that is not finite finds nothing.
   std::size_t nearest_within(const Eigen::Vector3f& query, std::size_t k, float max_sq_distance, const uint8_t* allowed,
                              uint32_t* indices, float* sq_distances) const;
+
+  // Of each column holding any point, the point horizontally nearest its centre: a sample of
+  // the points spread as evenly as the columns, denser areas thinned the most. `column_points`,
+  // if given, receives how many points each one's column holds.
+  std::vector<uint32_t> central_points(std::vector<uint32_t>* column_points = nullptr) const;
 
   float cell_m() const { return cell_m_; }
   std::size_t bytes() const;

@@ -33,19 +33,28 @@ Eigen::Vector3f plane_normal(const std::vector<Eigen::Vector3f>& points, const u
 
 }  // namespace
 
-std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, int neighbours) {
+std::shared_ptr<const GicpCloud> prepare_gicp_cloud(const Cloud& cloud, const GicpConfig& config) {
   auto out = std::make_shared<GicpCloud>();
-  out->neighbours = neighbours;
-  out->points.reserve(cloud.size());
+  const int neighbours = out->neighbours = config.neighbours;
+  out->soundings.reserve(cloud.size());
   for (const pcl::PointXYZ& p : cloud) {
-    out->points.push_back(p.getVector3fMap());
-    out->lo = out->lo.cwiseMin(out->points.back().head<2>());
-    out->hi = out->hi.cwiseMax(out->points.back().head<2>());
+    out->soundings.push_back(p.getVector3fMap());
+    out->lo = out->lo.cwiseMin(out->soundings.back().head<2>());
+    out->hi = out->hi.cwiseMax(out->soundings.back().head<2>());
+  }
+  out->sounding_grid = std::make_unique<ColumnGrid>(out->soundings);
+  if (config.soundings_per_sample <= 1) {
+    out->points = out->soundings;
+    out->represents.assign(out->points.size(), 1);
+  } else {
+    for (uint32_t i : ColumnGrid(out->soundings, config.soundings_per_sample).central_points(&out->represents)) {
+      out->points.push_back(out->soundings[i]);
+    }
   }
   out->grid = std::make_unique<ColumnGrid>(out->points);
   out->normals.assign(out->points.size(), Eigen::Vector3f::Zero());
-  // Too few points for a neighbourhood: every covariance stays the identity.
-  const bool none = neighbours < 3 || out->points.size() < static_cast<std::size_t>(neighbours);
+  // Too few soundings for a neighbourhood: every covariance stays the identity.
+  const bool none = neighbours < 3 || out->soundings.size() < static_cast<std::size_t>(neighbours);
   out->has_normal.assign(out->points.size(), none ? 1 : 0);
   return out;
 }
@@ -65,22 +74,24 @@ void GicpCloud::ensure_normals(const std::vector<uint32_t>& indices, int threads
     std::vector<float> sq_distance(k);
     for (std::size_t m = begin; m < end; ++m) {
       const uint32_t i = missing[m];
-      const std::size_t found = grid->nearest_within(points[i], k, INFINITY, nullptr, index.data(), sq_distance.data());
-      normals[i] = plane_normal(points, index.data(), found);
+      const std::size_t found =
+          sounding_grid->nearest_within(points[i], k, INFINITY, nullptr, index.data(), sq_distance.data());
+      normals[i] = plane_normal(soundings, index.data(), found);
     }
   });
 }
 
 std::size_t GicpCloud::bytes() const {
-  return points.size() * (sizeof(Eigen::Vector3f) * 2 + sizeof(uint8_t)) + (grid ? grid->bytes() : 0);
+  return soundings.size() * sizeof(Eigen::Vector3f) +
+         points.size() * (sizeof(Eigen::Vector3f) * 2 + sizeof(uint32_t) + sizeof(uint8_t)) +
+         (sounding_grid ? sounding_grid->bytes() : 0) + (grid ? grid->bytes() : 0);
 }
 
-GicpCloudCache::GicpCloudCache(std::size_t submaps, FilteredCloud filtered, int neighbours)
-    : filtered_(std::move(filtered)), neighbours_(neighbours), entries_(submaps) {}
+GicpCloudCache::GicpCloudCache(std::size_t submaps, FilteredCloud filtered, const GicpConfig& config)
+    : filtered_(std::move(filtered)), config_(config), entries_(submaps) {}
 
-GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, int neighbours)
-    : GicpCloudCache(clouds.size(), [&clouds](std::size_t i) { return clouds[i]; }, neighbours) {}
-
+GicpCloudCache::GicpCloudCache(const std::vector<Cloud::Ptr>& clouds, const GicpConfig& config)
+    : GicpCloudCache(clouds.size(), [&clouds](std::size_t i) { return clouds[i]; }, config) {}
 const GicpCloud& GicpCloudCache::at(std::size_t submap) {
   std::shared_ptr<Entry> entry;
   {
@@ -90,7 +101,7 @@ const GicpCloud& GicpCloudCache::at(std::size_t submap) {
     slot->last_used = ++uses_;
     entry = slot;
   }
-  std::call_once(entry->built, [&] { entry->cloud = prepare_gicp_cloud(*filtered_(submap), neighbours_); });
+  std::call_once(entry->built, [&] { entry->cloud = prepare_gicp_cloud(*filtered_(submap), config_); });
   return *entry->cloud;
 }
 

@@ -17,13 +17,13 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 // Points of `cloud` whose horizontal position, moved by `cloud_to_other`, falls inside the
 // other cloud's box widened by `margin_m`: crop_to_overlap's test, in float like it.
 template <typename Keep>
-void in_box(const GicpCloud& cloud, const GicpCloud& other, const Eigen::Isometry3d& cloud_to_other, double margin_m,
-            Keep&& keep) {
+void in_box(const std::vector<Eigen::Vector3f>& points, const GicpCloud& other, const Eigen::Isometry3d& cloud_to_other,
+            double margin_m, Keep&& keep) {
   const Eigen::Vector2f lo = other.lo.array() - static_cast<float>(margin_m);
   const Eigen::Vector2f hi = other.hi.array() + static_cast<float>(margin_m);
   const Eigen::Isometry3f t = cloud_to_other.cast<float>();
-  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-    const Eigen::Vector2f q = (t * cloud.points[i]).head<2>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2f q = (t * points[i]).head<2>();
     keep(i, (q.array() >= lo.array()).all() && (q.array() <= hi.array()).all());
   }
 }
@@ -33,14 +33,21 @@ void in_box(const GicpCloud& cloud, const GicpCloud& other, const Eigen::Isometr
 GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
                          double margin_m, int threads) {
   GicpOverlap o;
-  in_box(source, target, source_to_target, margin_m, [&](std::size_t i, bool inside) {
+  in_box(source.points, target, source_to_target, margin_m, [&](std::size_t i, bool inside) {
     if (inside) o.source_points.push_back(static_cast<uint32_t>(i));
   });
   o.target_allowed.assign(target.points.size(), 0);
   std::vector<uint32_t> target_points;
-  in_box(target, source, source_to_target.inverse(), margin_m, [&](std::size_t i, bool inside) {
+  in_box(target.points, source, source_to_target.inverse(), margin_m, [&](std::size_t i, bool inside) {
     o.target_allowed[i] = inside;
     if (inside) target_points.push_back(static_cast<uint32_t>(i));
+  });
+  in_box(source.soundings, target, source_to_target, margin_m, [&](std::size_t, bool inside) {
+    o.source_soundings += inside ? 1 : 0;
+  });
+  o.target_soundings_allowed.assign(target.soundings.size(), 0);
+  in_box(target.soundings, source, source_to_target.inverse(), margin_m, [&](std::size_t i, bool inside) {
+    o.target_soundings_allowed[i] = inside;
   });
   o.target_points = target_points.size();
   source.ensure_normals(o.source_points, threads);
@@ -119,6 +126,45 @@ std::vector<GicpCorrespondence> Associator::at(const Eigen::Isometry3d& source_t
   });
   searches_ += all.searches;
   return std::move(all.associations.list);
+}
+
+RegistrationQuality sampled_overlap_quality(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                                            const Eigen::Isometry3d& source_to_target, double max_distance_m,
+                                            int threads) {
+  // Weighted by the soundings each sample point stands for.
+  struct Within {
+    double represented = 0, within = 0, sq_distance_sum = 0;
+    Within& operator+=(const Within& o) {
+      represented += o.represented;
+      within += o.within;
+      sq_distance_sum += o.sq_distance_sum;
+      return *this;
+    }
+  };
+  const Eigen::Isometry3f moved_by = source_to_target.cast<float>();
+  const float max_sq = static_cast<float>(max_distance_m * max_distance_m);
+  const uint8_t* allowed = overlap.target_soundings_allowed.empty() ? nullptr : overlap.target_soundings_allowed.data();
+  const Within within = parallel_sum<Within>(overlap.source_points.size(), threads,
+                                             [&](Within& sum, std::size_t begin, std::size_t end) {
+    uint32_t index = 0;
+    float sq_distance = 0;
+    for (std::size_t k = begin; k < end; ++k) {
+      const uint32_t i = overlap.source_points[k];
+      const double weight = source.represents[i];
+      sum.represented += weight;
+      if (target.sounding_grid->nearest_within(moved_by * source.points[i], 1, max_sq, allowed, &index, &sq_distance) == 1) {
+        sum.within += weight;
+        sum.sq_distance_sum += weight * sq_distance;
+      }
+    }
+  });
+  RegistrationQuality q;
+  if (!(within.within > 0)) return q;
+  q.fitness = within.within / within.represented;
+  q.overlap_points = static_cast<std::size_t>(std::llround(q.fitness * static_cast<double>(overlap.source_soundings)));
+  q.overlap_points = std::max<std::size_t>(q.overlap_points, 1);  // some point overlaps: not "no overlap"
+  q.overlap_mse_m2 = within.sq_distance_sum / within.within;
+  return q;
 }
 
 std::vector<GicpCorrespondence> associate_gicp(const GicpCloud& target, const GicpCloud& source,

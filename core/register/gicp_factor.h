@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "core/register/gicp.h"
 #include "core/register/gicp_cloud.h"
 
 namespace bathyslam {
@@ -17,15 +18,19 @@ namespace bathyslam {
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-// What registers: the source's points in the predicted overlap, and which target points are in it.
+// What registers: the source's sample points in the predicted overlap, and which target sample
+// points are in it; and what the quality is measured on: which target soundings are in it, and
+// how many source soundings.
 struct GicpOverlap {
   std::vector<uint32_t> source_points;
-  std::vector<uint8_t> target_allowed;  // one per target point
+  std::vector<uint8_t> target_allowed;  // one per target sample point
   std::size_t target_points = 0;        // how many are allowed
+  std::vector<uint8_t> target_soundings_allowed;  // one per target sounding
+  std::size_t source_soundings = 0;
 };
 
-// The same crop as crop_to_overlap (gicp.h) on both clouds, as indices and a mask, with the
-// normals of every point in it computed (GicpCloud::ensure_normals).
+// The same crop as crop_to_overlap (gicp.h) on both clouds, as indices and masks, with the
+// normals of every sample point in it computed (GicpCloud::ensure_normals).
 GicpOverlap gicp_overlap(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
                          double margin_m, int threads = 1);
 
@@ -69,6 +74,14 @@ class Associator {
   std::vector<uint32_t> candidates_;    // kCandidates per overlap source point, nearest first
   std::size_t searches_ = 0;
 };
+
+// The overlap's quality at `source_to_target` as register_gicp measures it on every sounding
+// (nearest target sounding within `max_distance_m`), estimated from the source's sample, each
+// point weighing the soundings it stands for: fitness and mean squared distance, and the count
+// within the gate as the fitness times the overlap's source soundings.
+RegistrationQuality sampled_overlap_quality(const GicpCloud& target, const GicpCloud& source, const GicpOverlap& overlap,
+                                            const Eigen::Isometry3d& source_to_target, double max_distance_m,
+                                            int threads);
 
 // One association from scratch (Associator::at).
 std::vector<GicpCorrespondence> associate_gicp(const GicpCloud& target, const GicpCloud& source,

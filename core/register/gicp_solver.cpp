@@ -88,24 +88,29 @@ bool small_change(const Eigen::Isometry3d& before, const Eigen::Isometry3d& afte
   return std::max(rotation, translation) < 1;
 }
 
+// Of the soundings the overlap's sample points stand for (GicpCloud::represents).
 Eigen::Vector3d target_centroid(const GicpCloud& target, const GicpOverlap& overlap) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  std::size_t n = 0;
+  double n = 0;
   for (std::size_t j = 0; j < target.points.size(); ++j) {
     if (overlap.target_allowed.empty() || overlap.target_allowed[j]) {
-      sum += target.points[j].cast<double>();
-      ++n;
+      sum += target.represents[j] * target.points[j].cast<double>();
+      n += target.represents[j];
     }
   }
-  return n > 0 ? Eigen::Vector3d(sum / static_cast<double>(n)) : sum;
+  return n > 0 ? Eigen::Vector3d(sum / n) : sum;
 }
 
 }  // namespace
 
 Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& overlap) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (uint32_t i : overlap.source_points) sum += source.points[i].cast<double>();
-  return overlap.source_points.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(overlap.source_points.size()));
+  double n = 0;
+  for (uint32_t i : overlap.source_points) {
+    sum += source.represents[i] * source.points[i].cast<double>();
+    n += source.represents[i];
+  }
+  return n > 0 ? Eigen::Vector3d(sum / n) : sum;
 }
 
 GaussNewtonPass gauss_newton_gicp(const GicpCloud& target, const GicpCloud& source, Associator& associator,
@@ -214,19 +219,16 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
   }
   PreparedRegistration out;
   out.registration.source_to_target = pass.source_to_target;
-  // Quality (and the Hessian) at Table 1's gate whatever pass produced the answer, as the wrapper
-  // measures it: one more association at the answer.
-  const Eigen::Vector3d anchor = hessian_anchor != nullptr ? pass.source_to_target * *hessian_anchor : Eigen::Vector3d::Zero();
-  const GicpLinearisation at_answer = linearise_gicp(target, source, at_gate.at(pass.source_to_target, threads),
-                                                     pass.source_to_target, anchor, threads, hessian_anchor != nullptr);
-  RegistrationQuality& q = out.registration.quality;
-  q.converged = pass.converged;
-  q.overlap_points = at_answer.correspondences;
-  q.overlap_mse_m2 = at_answer.correspondences > 0 ? at_answer.sq_distance_sum / at_answer.correspondences : 0.0;
-  q.fitness = overlap.source_points.empty()
-                  ? 0.0
-                  : static_cast<double>(at_answer.correspondences) / static_cast<double>(overlap.source_points.size());
+  // Quality at Table 1's gate whatever pass produced the answer, on every sounding as the
+  // wrapper measures it (estimated from the sample).
+  out.registration.quality =
+      sampled_overlap_quality(target, source, overlap, pass.source_to_target, config.max_correspondence_m, threads);
+  out.registration.quality.converged = pass.converged;
   if (hessian_anchor != nullptr) {
+    const Eigen::Vector3d anchor = pass.source_to_target * *hessian_anchor;
+    const GicpLinearisation at_answer =
+        linearise_gicp(target, source, at_gate.at(pass.source_to_target, threads), pass.source_to_target, anchor,
+                       threads, true);
     out.hessian.hessian = at_answer.hessian;
     out.hessian.regularisation = at_answer.regularisation;
     out.hessian.correspondences = at_answer.correspondences;

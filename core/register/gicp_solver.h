@@ -55,7 +55,7 @@ PreparedRegistration register_prepared(const GicpCloud& target, const GicpCloud&
                                        const Eigen::Vector3d* hessian_anchor = nullptr,
                                        const std::atomic<bool>* cancel = nullptr);
 
-// Mean of the overlap's source points, source frame (double sum).
+// Mean of the soundings the overlap's source sample stands for, source frame (double sum).
 Eigen::Vector3d source_centroid(const GicpCloud& source, const GicpOverlap& overlap);
 
 }  // namespace bathyslam

@@ -99,5 +99,42 @@ TEST(ColumnGrid, AnEmptyGridOrANonFiniteQueryFindsNothing) {
   EXPECT_EQ(index, 1u);
 }
 
+// The sample keeps one point per occupied column: every point has a sample point within a column's
+// diagonal, no point twice, and a dense patch is thinned to the columns it covers.
+TEST(ColumnGrid, CentralPointsAreOnePerOccupiedColumn) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> wide(0, 20), patch(5, 10), depth(-0.2f, 0.2f);
+  std::vector<Eigen::Vector3f> points;
+  for (int n = 0; n < 4000; ++n) points.emplace_back(wide(rng), wide(rng), depth(rng));
+  for (int n = 0; n < 4000; ++n) points.emplace_back(patch(rng), patch(rng), depth(rng));
+  const double per_column = 4;
+  const ColumnGrid grid(points, per_column);
+  const std::vector<uint32_t> sample = grid.central_points();
+  std::vector<uint32_t> sorted = sample;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_TRUE(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end()) << "a point twice";
+  EXPECT_GT(sample.size(), points.size() / 8);
+  EXPECT_LT(sample.size(), points.size() / 3);
+  std::vector<Eigen::Vector3f> kept;
+  std::size_t in_patch = 0;
+  for (uint32_t i : sample) {
+    ASSERT_LT(i, points.size());
+    kept.push_back(points[i]);
+    in_patch += (points[i].head<2>().array() >= 5).all() && (points[i].head<2>().array() <= 10).all() ? 1 : 0;
+  }
+  // The patch's 25 m² hold ~4250 points and ~25 / cell² columns.
+  const double patch_columns = 25 / (grid.cell_m() * grid.cell_m());
+  EXPECT_LT(static_cast<double>(in_patch), 1.3 * patch_columns);
+  const ColumnGrid sample_grid(kept);
+  const float diagonal_sq = 2 * grid.cell_m() * grid.cell_m();
+  for (std::size_t i = 0; i < points.size(); i += 7) {
+    uint32_t index = 0;
+    float sq = 0;
+    ASSERT_EQ(sample_grid.nearest_within(points[i], 1, INFINITY, nullptr, &index, &sq), 1u);
+    // Its column's sample is within the diagonal horizontally and 0.4 m in depth.
+    EXPECT_LE((kept[index] - points[i]).head<2>().squaredNorm(), diagonal_sq + 0.4f * 0.4f) << i;
+  }
+}
+
 }  // namespace
 }  // namespace bathyslam
