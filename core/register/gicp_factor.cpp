@@ -186,7 +186,7 @@ struct NormalEquationSums {
   Eigen::Vector3d y_cross_md = Eigen::Vector3d::Zero();  // Σ y × M d
   Eigen::Vector3d y = Eigen::Vector3d::Zero();
   Eigen::Matrix3d yy = Eigen::Matrix3d::Zero();
-  double cost = 0, sq_distance_sum = 0;
+  double cost = 0;
   std::size_t correspondences = 0;
 
   NormalEquationSums& operator+=(const NormalEquationSums& o) {
@@ -198,7 +198,6 @@ struct NormalEquationSums {
     y += o.y;
     yy += o.yy;
     cost += o.cost;
-    sq_distance_sum += o.sq_distance_sum;
     correspondences += o.correspondences;
     return *this;
   }
@@ -220,7 +219,6 @@ struct NormalEquationSums {
       out.regularisation.bottomRightCorner<3, 3>() = 0.5 * (yy.trace() * Eigen::Matrix3d::Identity() - yy);
     }
     out.cost = cost;
-    out.sq_distance_sum = sq_distance_sum;
     out.correspondences = correspondences;
     return out;
   }
@@ -259,7 +257,6 @@ GicpLinearisation linearise_gicp(const GicpCloud& target, const GicpCloud& sourc
         sum.yy.noalias() += y * y.transpose();
       }
       sum.cost += 0.5 * d.dot(md);
-      sum.sq_distance_sum += d.squaredNorm();
       ++sum.correspondences;
     }
   }).linearisation(with_regularisation);

@@ -95,7 +95,6 @@ struct GicpLinearisation {
   Vector6d gradient = Vector6d::Zero();   // Σ Jᵀ M d
   Matrix6d regularisation = Matrix6d::Zero();  // Σ Jᵀ (½ I) J, only if asked for
   double cost = 0;                        // ½ Σ dᵀ M d
-  double sq_distance_sum = 0;             // Σ |d|² (Euclidean, for the overlap MSE)
   std::size_t correspondences = 0;
 };
 
