@@ -1,5 +1,7 @@
 #include "core/pipeline/register_pairs.h"
 
+#include <algorithm>
+
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/robust_backend.h"
 
@@ -88,9 +90,28 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
 std::vector<Constraint> register_pairs(const std::vector<Candidate>& candidates,
                                        const std::vector<Eigen::Isometry3d>& estimate, const RegistrationInputs& inputs,
                                        const PipelineConfig& config, const Plan& plan, const std::atomic<bool>* cancel) {
+  // Our GICP prepares each submap on its first registration, and a pair whose submap another
+  // thread is preparing waits for it: consecutive candidates share a submap, so with the pairs
+  // alone the two threads took turns. The adjacent pairs' submaps are prepared first, in the
+  // same loop (no barrier between); a loop closure's older submap only when its pair
+  // registers, because the switch may send that pair down the direct path, unregistered.
+  std::vector<int> to_prepare;
+  if (config.registration.gicp.engine == 1) {
+    for (const Candidate& c : candidates) {
+      if (c.type == ConstraintType::kAdjacent) to_prepare.insert(to_prepare.end(), {c.pair.target, c.pair.source});
+    }
+    std::sort(to_prepare.begin(), to_prepare.end());
+    to_prepare.erase(std::unique(to_prepare.begin(), to_prepare.end()), to_prepare.end());
+  }
   std::vector<Constraint> constraints(candidates.size());
-  parallel_for(candidates.size(), plan.threads, cancel,
-               [&](std::size_t k) { constraints[k] = register_pair(candidates[k], estimate, inputs, config, plan, cancel); });
+  parallel_for(to_prepare.size() + candidates.size(), plan.threads, cancel, [&](std::size_t k) {
+    if (k < to_prepare.size()) {
+      inputs.prepared.at(static_cast<std::size_t>(to_prepare[k]));
+      return;
+    }
+    k -= to_prepare.size();
+    constraints[k] = register_pair(candidates[k], estimate, inputs, config, plan, cancel);
+  });
   return constraints;
 }
 
