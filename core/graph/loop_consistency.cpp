@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace bathyslam {
@@ -139,7 +141,7 @@ LoopCandidate reversed(const LoopCandidate& loop) {
   jacobian.topLeftCorner<3, 3>() = r_t;
   jacobian.topRightCorner<3, 3>() = r_t * skew(loop.measured.translation());
   jacobian.bottomRightCorner<3, 3>() = r_t;
-  return {loop.to, loop.from, loop.measured.inverse(), jacobian * loop.covariance * jacobian.transpose()};
+  return {loop.to, loop.from, loop.measured.inverse(), jacobian * loop.covariance * jacobian.transpose(), loop.id};
 }
 
 double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr) {
@@ -149,6 +151,25 @@ double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const D
                                        {j_back.measured, j_back.covariance},
                                        {dr.relative_pose(j.from, i.from), dr.covariance(j.from, i.from)}});
   return mahalanobis2_xy_yaw(pose_difference(cycle.pose, Eigen::Isometry3d::Identity()), cycle.covariance);
+}
+
+int PairDistances::slot(int id) {
+  if (id >= static_cast<int>(slot_of_id_.size())) slot_of_id_.resize(id + 1, -1);
+  if (slot_of_id_[id] < 0) {
+    slot_of_id_[id] = static_cast<int>(rows_.size());
+    rows_.emplace_back();
+  }
+  return slot_of_id_[id];
+}
+
+double PairDistances::operator()(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr) {
+  if (i.id < 0 || j.id < 0 || i.id == j.id) return pair_mahalanobis2(i, j, dr);
+  const int a = slot(i.id), b = slot(j.id);
+  std::vector<double>& row = rows_[std::max(a, b)];
+  const int column = std::min(a, b);
+  if (static_cast<int>(row.size()) <= column) row.resize(column + 1, std::numeric_limits<double>::quiet_NaN());
+  if (std::isnan(row[column])) row[column] = pair_mahalanobis2(i, j, dr);
+  return row[column];
 }
 
 Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices, long max_steps) {
@@ -174,7 +195,7 @@ Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices, long m
 }
 
 LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
-                                      const LoopConsistencyConfig& config) {
+                                      const LoopConsistencyConfig& config, PairDistances* known) {
   LoopSelection selection;
   selection.verdicts.assign(loops.size(), LoopVerdict::implausible);
   selection.dr_mahalanobis2.assign(loops.size(), 0.0);
@@ -196,7 +217,8 @@ LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, c
   Adjacency adjacency(n, std::vector<char>(n, 0));
   for (int a = 0; a < n; ++a) {
     for (int b = a + 1; b < n; ++b) {
-      adjacency[a][b] = adjacency[b][a] = pair_mahalanobis2(forward[a], forward[b], dr) <= config.pair_chi2_threshold;
+      const double d2 = known ? (*known)(forward[a], forward[b], dr) : pair_mahalanobis2(forward[a], forward[b], dr);
+      adjacency[a][b] = adjacency[b][a] = d2 <= config.pair_chi2_threshold;
     }
   }
   const Clique clique = maximum_clique(adjacency, config.max_exact_loops, config.max_branch_steps);

@@ -98,6 +98,7 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
   const int batch = plan.batch_submaps > 0 ? plan.batch_submaps : std::max(n, 1);
   std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
   std::vector<char> solved_with;  // per constraint: in the graph at the last solve
+  PairDistances pair_distances;   // PCM's pairwise tests so far, by constraint
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
     for (int s = std::max(begin, 1); s < end; ++s) {
@@ -106,7 +107,9 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     const std::vector<Candidate> candidates = candidates_ending_in(r.submaps, estimate, begin, end, config.candidates, plan);
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
-    if (plan.consistency) select_consistent_registrations(r.constraints, inputs.dr, r.dr_poses, config.robustness.pcm);
+    if (plan.consistency) {
+      select_consistent_registrations(r.constraints, inputs.dr, r.dr_poses, config.robustness.pcm, &pair_distances);
+    }
     const int first_changed = first_node_changed(r.constraints, solved_with);
     if (end < n && first_changed < end) {
       // The submaps registered so far: the later ones would hang off them by odometry alone and

@@ -57,7 +57,8 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
 }
 
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
-                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config) {
+                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config,
+                                     PairDistances* known) {
   std::vector<std::size_t> owner;
   std::vector<LoopCandidate> candidates;
   for (std::size_t k = 0; k < constraints.size(); ++k) {
@@ -67,8 +68,9 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
     if (!c.in_graph() || !carries_horizontal_information(c.information)) continue;
     owner.push_back(k);
     candidates.push_back(loop_candidate(edge_of(c), dr_poses));
+    candidates.back().id = static_cast<int>(k);
   }
-  const LoopSelection selection = select_consistent_loops(candidates, dr, config);
+  const LoopSelection selection = select_consistent_loops(candidates, dr, config, known);
   for (std::size_t i = 0; i < owner.size(); ++i) {
     if (selection.verdicts[i] == LoopVerdict::kept) continue;
     constraints[owner[i]].exclusion = {RejectionKind::kInconsistent, selection.verdicts[i] == LoopVerdict::implausible

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/graph/dr_noise.h"
+#include "core/graph/loop_consistency.h"
 #include "core/pipeline/pipeline.h"
 
 namespace bathyslam {
@@ -17,10 +18,12 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
 
 // Pairwise consistency (PCM) over the accepted registrations that carry horizontal information
 // (the ones that can bend the survey); the rest of the accepted set is left out of the graph
-// with the reason. Recomputed from scratch on each call: a later batch may confirm a
-// registration an earlier one could not.
+// with the reason. Selected again from all of them on each call: a later batch may confirm a
+// registration an earlier one could not. With `known`, kept from one call to the next for the
+// same growing `constraints`, each pair's test is computed once.
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
-                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config);
+                                     const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config,
+                                     PairDistances* known = nullptr);
 
 // The graph of the constraints in it, solved from `initial` (dead reckoning, or a batch's
 // estimate). With `nodes`, only the constraints among the first `nodes` poses; the others keep

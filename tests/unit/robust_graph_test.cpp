@@ -557,5 +557,31 @@ TEST(RobustGraph, RecoversALawnmowerFromThirtyPercentWrongLoops) {
   }
 }
 
+// The pipeline selects again after every batch, with the pairs' tests kept (PairDistances):
+// batch after batch, the selection must be the one every pair computed afresh gives.
+TEST(RobustGraph, KeptPairDistancesSelectAsComputingEveryPair) {
+  // As above: the first loop turned 10° (plausible, inconsistent), the last 180° (implausible).
+  const Survey s = lawnmower(3);
+  std::mt19937 rng(4);
+  const auto [adjacent, loops] = registrations(s, rng);
+  std::vector<PoseGraphEdge> edges = joined(adjacent, loops);
+  edges.front().measured = edges.front().measured * pose(0, 0, 10 * kDeg, 0);
+  edges.back().measured = edges.back().measured * pose(0, 0, M_PI, 0);
+  std::vector<LoopCandidate> all = candidates_of(edges, s.dr);
+  for (std::size_t k = 0; k < all.size(); ++k) all[k].id = static_cast<int>(k);
+  const DrNoiseModel dr(s.dr, GraphConfig{});
+  PairDistances known;
+  int inconsistent = 0;
+  for (std::size_t n = 5; n <= all.size(); n += 5) {
+    const std::vector<LoopCandidate> batch(all.begin(), all.begin() + n);
+    const LoopSelection fresh = select_consistent_loops(batch, dr);
+    const LoopSelection kept = select_consistent_loops(batch, dr, {}, &known);
+    ASSERT_EQ(kept.verdicts, fresh.verdicts) << n << " loops";
+    ASSERT_EQ(kept.kept, fresh.kept) << n << " loops";
+    inconsistent = static_cast<int>(std::count(fresh.verdicts.begin(), fresh.verdicts.end(), LoopVerdict::inconsistent));
+  }
+  EXPECT_GT(inconsistent, 0) << "a wrong loop must be tested against the others";
+}
+
 }  // namespace
 }  // namespace bathyslam
