@@ -154,13 +154,15 @@ double descriptor_ncc(const Eigen::VectorXf& a, const Eigen::VectorXf& b) {
 
 double descriptor_mse(const Eigen::VectorXf& a, const Eigen::VectorXf& b, double bound) {
   // The sum of squares only grows: once past the bound it stays there.
+  // Blocks of 16 that Eigen vectorises, the bound tested after each (the loop one element at a
+  // time was 14 % of a job's CPU: matching tests every keypoint within 30 m).
   const Eigen::Index n = a.size();
   const double limit = bound * static_cast<double>(n);
   double sum = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double d = a[i] - b[i];
-    sum += d * d;
-    if (i % 16 == 15 && sum >= limit) break;
+  for (Eigen::Index start = 0; start < n; start += 16) {
+    const Eigen::Index length = std::min<Eigen::Index>(16, n - start);
+    sum += (a.segment(start, length) - b.segment(start, length)).cast<double>().squaredNorm();
+    if (sum >= limit) break;
   }
   return sum / static_cast<double>(n);
 }

@@ -38,16 +38,17 @@ void FlannIndex::search(const float* query, int k, pcl::Indices& indices, std::v
   for (std::size_t j = 0; j < at.size(); ++j) indices[j] = cloud_index_[at[j]];
 }
 
-int FlannIndex::within(const float* query, double radius, pcl::Indices& indices, std::vector<float>& sq_distances) const {
+int FlannIndex::within(const float* query, double radius, pcl::Indices& indices, std::vector<float>& sq_distances,
+                       bool sorted) const {
   indices.clear();
   sq_distances.clear();
   if (index_ == nullptr) return 0;
   flann::RadiusResultSet<float> result(static_cast<float>(radius * radius));
-  index_->findNeighbors(result, query, flann::SearchParams(-1, 0.0f, true));  // KdTreeFLANN's param_radius_
+  index_->findNeighbors(result, query, flann::SearchParams(-1, 0.0f, sorted));  // KdTreeFLANN's param_radius_
   const std::size_t n = result.size();
   std::vector<std::size_t> at(n);
   sq_distances.resize(n);
-  if (n > 0) result.copy(at.data(), sq_distances.data(), n, true);
+  if (n > 0) result.copy(at.data(), sq_distances.data(), n, sorted);
   indices.resize(n);
   for (std::size_t j = 0; j < n; ++j) indices[j] = cloud_index_[at[j]];
   return static_cast<int>(n);

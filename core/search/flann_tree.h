@@ -23,8 +23,10 @@ class FlannIndex {
   std::size_t size() const { return cloud_index_.size(); }
   // pcl::KdTreeFLANN::nearestKSearch: the k nearest, nearest first.
   int nearest(const float* query, int k, pcl::Indices& indices, std::vector<float>& sq_distances) const;
-  // pcl::KdTreeFLANN::radiusSearch without max_nn: all within `radius`, by distance then index.
-  int within(const float* query, double radius, pcl::Indices& indices, std::vector<float>& sq_distances) const;
+  // pcl::KdTreeFLANN::radiusSearch without max_nn: all within `radius`, by distance then index;
+  // unless not `sorted`: then in the tree's order, which saves sorting them.
+  int within(const float* query, double radius, pcl::Indices& indices, std::vector<float>& sq_distances,
+             bool sorted = true) const;
 
  private:
   using Index = flann::KDTreeSingleIndex<flann::L2_Simple<float>>;
