@@ -11,7 +11,8 @@
 //   OUT_PREFIX.ditherK    (K = 1..3) the beams with uniform noise of +-STEP/2 in the level frame:
 //                         a perturbation of the size of the beams' rounding, not the rounding
 //
-// STEP is the beam arrays' resolution (--step, 0.001 m: the writer's millimetres).
+// STEP is the beam arrays' resolution (--step, 0.001 m: the writer's millimetres). With
+// --dither-only, only the ditherK copies: the noise floor of a figure (README, "Performance").
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -102,17 +103,42 @@ void write(const Survey& survey, const std::string& path) {
   std::printf("%s\n", path.c_str());
 }
 
+int write_dithers(const Survey& original, const std::string& prefix, double step) {
+  for (int k = 1; k <= 3; ++k) {
+    std::mt19937_64 random(k);
+    std::uniform_real_distribution<double> noise(-step / 2, step / 2);
+    Survey s = original;
+    change_in_level_frame(s, [&](double v) { return v + noise(random); });
+    write(s, prefix + ".dither" + std::to_string(k));
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: bench_gsf_losses BUNDLE OUT_PREFIX [--step 0.001]\n");
+    std::fprintf(stderr, "usage: bench_gsf_losses BUNDLE OUT_PREFIX [--step 0.001] [--dither-only]\n");
     return 2;
   }
   const std::string prefix = argv[2];
-  const double step = argc >= 5 && std::string(argv[3]) == "--step" ? std::stod(argv[4]) : 0.001;
+  double step = 0.001;
+  bool dither_only = false;
+  for (int i = 3; i < argc; ++i) {
+    const std::string option = argv[i];
+    if (option == "--step" && i + 1 < argc) {
+      step = std::stod(argv[++i]);
+    } else if (option == "--dither-only") {
+      dither_only = true;
+    } else {
+      std::fprintf(stderr, "bench_gsf_losses: unknown option %s\n", option.c_str());
+      return 2;
+    }
+  }
   const Survey original = load_bundle(argv[1]);
   const std::string& crs = original.metadata.crs;
+
+  if (dither_only) return write_dithers(original, prefix, step);
 
   Survey s = original;
   s.nav = nav_at_pings(original);
@@ -144,12 +170,5 @@ int main(int argc, char** argv) {
   round_depth(s.nav);
   write(s, prefix + ".all");
 
-  for (int k = 1; k <= 3; ++k) {
-    std::mt19937_64 random(k);
-    std::uniform_real_distribution<double> noise(-step / 2, step / 2);
-    s = original;
-    change_in_level_frame(s, [&](double v) { return v + noise(random); });
-    write(s, prefix + ".dither" + std::to_string(k));
-  }
-  return 0;
+  return write_dithers(original, prefix, step);
 }
