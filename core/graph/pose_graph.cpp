@@ -4,19 +4,12 @@
 
 #include <ceres/ceres.h>
 
+#include "core/graph/relative_pose_cost.h"
 #include "core/graph/relative_pose_error.h"
 #include "core/graph/robust_kernel.h"
 
 namespace bathyslam {
 namespace {
-
-// S with SᵀS = information. Not Cholesky: an edge may leave directions it does not observe at
-// zero information, and Cholesky of a singular matrix divides by zero.
-Information6 square_root(const Information6& information) {
-  const Eigen::SelfAdjointEigenSolver<Information6> eigen(information);
-  const Eigen::Matrix<double, 6, 1> roots = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return roots.asDiagonal() * eigen.eigenvectors().transpose();
-}
 
 // A node as one parameter block: position, then the unit quaternion as Eigen stores it (x, y, z,
 // w). One block per pose rather than two keeps the normal equations in whole 6x6 blocks, which
@@ -25,40 +18,6 @@ Information6 square_root(const Information6& information) {
 constexpr int kNodeSize = 7;
 using Node = Eigen::Matrix<double, kNodeSize, 1>;
 using NodeManifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
-
-// A relative-pose measurement between two nodes (position, unit quaternion) as a Ceres cost:
-// relative_pose_error whitened by the square root of its information.
-class RelativePoseCost {
- public:
-  RelativePoseCost(const Eigen::Isometry3d& measured, const Eigen::Vector3d& anchor,
-                   const Information6& sqrt_information)
-      : anchor_(anchor),
-        anchor_measured_(measured * anchor),
-        q_measured_(Eigen::Quaterniond(measured.rotation()).normalized()),
-        sqrt_information_(sqrt_information) {}
-
-  template <typename T>
-  bool operator()(const T* a, const T* b, T* residuals_ptr) const {
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(a), p_b(b);
-    const Eigen::Map<const Eigen::Quaternion<T>> q_a(a + 3), q_b(b + 3);
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
-    residuals = sqrt_information_.template cast<T>() *
-                relative_pose_error<T>(p_a, q_a, p_b, q_b, anchor_, anchor_measured_, q_measured_);
-    return true;
-  }
-
-  static ceres::CostFunction* create(const PoseGraphEdge& edge) {
-    const Information6 sqrt_information = square_root(edge.information);
-    return new ceres::AutoDiffCostFunction<RelativePoseCost, 6, kNodeSize, kNodeSize>(
-        new RelativePoseCost(edge.measured, edge.anchor, sqrt_information));
-  }
-
- private:
-  Eigen::Vector3d anchor_;           // in `to`'s frame
-  Eigen::Vector3d anchor_measured_;  // where the measurement puts it in `from`'s frame
-  Eigen::Quaterniond q_measured_;
-  Information6 sqrt_information_;
-};
 
 }  // namespace
 
@@ -105,7 +64,7 @@ GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
   ceres::Manifold* node_manifold = new NodeManifold;
   for (const PoseGraphEdge& edge : edges) {
     ceres::LossFunction* loss = edge.robust ? registration_loss(config) : nullptr;
-    problem.AddResidualBlock(RelativePoseCost::create(edge), loss, nodes[edge.from].data(), nodes[edge.to].data());
+    problem.AddResidualBlock(new RelativePoseCost(edge), loss, nodes[edge.from].data(), nodes[edge.to].data());
   }
   for (Node& node : nodes) {
     if (problem.HasParameterBlock(node.data())) problem.SetManifold(node.data(), node_manifold);
