@@ -3,7 +3,13 @@
 // `mchs` best-quality information, and the graph is solved from dead reckoning as the pipeline
 // solves it. Registrations relate submaps to each other only, so whatever drift the survey's
 // geometry cannot see stays; this is the floor under any registration method's trajectory RMSE.
-//   bench_oracle_graph BUNDLE [--no-loops] [--edges REPORT] [key=value ...]
+//   bench_oracle_graph BUNDLE [--no-loops] [--edges REPORT] [--observable] [key=value ...]
+// --observable: the achievable floor on this seabed (issue 31). Each pair's true edge carries only
+// the information its overlap supports: the GICP cost's curvature at the truth, shaped and
+// weighed as `mchs` weighs a registration's (quality_information with information_from_hessian),
+// and the DR noise is the survey's own as `mchs` estimates it (navigation_noise.h), from these
+// edges. Prints the trajectory RMSE (unaligned and aligned) and the map's consistency RMSE and p99,
+// with dead reckoning's, and a last line `floor traj aligned cons p99` for scripts.
 // --edges takes the pairs from a report.json instead: its accepted registrations only, at the
 // truth, direct-path adjacent ones with depth, roll and pitch only, as `mchs` weighs them. This
 // separates what the front end got wrong from what the terrain never offered.
@@ -13,11 +19,75 @@
 #include <string>
 
 #include "bench/report_registrations.h"
+#include "core/filter/voxel_filter.h"
+#include "core/graph/loop_consistency.h"
 #include "core/eval/metrics.h"
 #include "core/io/bundle.h"
 #include "core/pipeline/pipeline.h"
 
 using namespace bathyslam;
+
+namespace {
+
+// The edge the truth gives a pair, with the information its overlap supports there.
+PoseGraphEdge observed_edge(const std::vector<Eigen::Isometry3d>& reference, const CandidatePair& p,
+                            GicpCloudCache& prepared, const PipelineConfig& config) {
+  const Eigen::Isometry3d truth = reference[p.target].inverse() * reference[p.source];
+  const PairRegistration seen = observe_at(prepared.at(p.target), prepared.at(p.source), truth, config.registration.gicp,
+                                           config.registration.crop_margin_m);
+  PoseGraphEdge edge{p.target, p.source, truth, Information6::Zero(), true, seen.anchor};
+  if (seen.hessian.correspondences == 0) return edge;
+  const Eigen::Matrix3d level_from_target =
+      level_from_body(Eigen::Quaterniond(reference[p.target].rotation())).toRotationMatrix();
+  edge.information = quality_information(seen, config.quality, level_from_target);
+  return edge;
+}
+
+int observable_floor(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& dr,
+                     const std::vector<Eigen::Isometry3d>& reference, PipelineConfig config, bool loops_on) {
+  config.quality.information_from_hessian = true;
+  const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr { return voxel_filter(set.submaps[i].points, config.voxel); };
+  GicpCloudCache prepared(set.submaps.size(), filtered, config.registration.gicp);
+  std::vector<CandidatePair> pairs = adjacent_line_candidates(set, reference, config.candidates);
+  if (loops_on) {
+    for (const CandidatePair& p : loop_candidates(set, reference, config.candidates)) pairs.push_back(p);
+  }
+  std::vector<PoseGraphEdge> registrations;
+  for (const CandidatePair& p : pairs) registrations.push_back(observed_edge(reference, p, prepared, config));
+
+  // The survey's own DR noise from these edges, as `mchs` estimates it from its registrations.
+  const DrNoiseModel any(dr, config.graph);
+  std::vector<DrInnovation> innovations;
+  for (const PoseGraphEdge& e : registrations) {
+    if (!carries_horizontal_information(e.information)) continue;
+    const LoopCandidate measured = loop_candidate(e, dr);
+    innovations.push_back({e.from, e.to, pose_difference(measured.measured, any.relative_pose(e.from, e.to)),
+                           measured.covariance});
+  }
+  const NavigationNoiseEstimate noise = estimate_navigation_noise(dr, innovations, config.graph, config.navigation_noise);
+  std::vector<PoseGraphEdge> edges = odometry_edges(
+      dr, information_from_sigmas(noise.graph.dr_sigma_translation_m, noise.graph.dr_sigma_rotation_rad));
+  edges.insert(edges.end(), registrations.begin(), registrations.end());
+  const GraphSolution solution = optimize_pose_graph(dr, edges, noise.graph);
+
+  const ErrorStats traj_dr = error_stats(trajectory_errors(set, dr)), traj = error_stats(trajectory_errors(set, solution.poses));
+  const ErrorStats aligned_dr = error_stats(aligned_trajectory_errors(set, dr));
+  const ErrorStats aligned = error_stats(aligned_trajectory_errors(set, solution.poses));
+  const ErrorStats cons_dr = consistency_error(set, dr, config.consistency).stats;
+  const ErrorStats cons = consistency_error(set, solution.poses, config.consistency).stats;
+  std::printf("%zu submaps, %zu pairs at the truth with the information their overlap supports; DR noise %.3f m, %.5f rad "
+              "per step from %d of them\n",
+              dr.size(), registrations.size(), noise.graph.dr_sigma_translation_m.x(), noise.graph.dr_sigma_rotation_rad.z(),
+              noise.innovations);
+  std::printf("trajectory RMSE: dead reckoning %.2f m, floor %.2f m; aligned %.2f m, floor %.2f m\n", traj_dr.rmse, traj.rmse,
+              aligned_dr.rmse, aligned.rmse);
+  std::printf("consistency RMSE: dead reckoning %.3f m, floor %.3f m; p99 %.3f m, floor %.3f m\n", cons_dr.rmse, cons.rmse,
+              cons_dr.p99, cons.p99);
+  std::printf("floor %.4f %.4f %.5f %.5f\n", traj.rmse, aligned.rmse, cons.rmse, cons.p99);
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) try {
   if (argc < 2) {
@@ -25,11 +95,12 @@ int main(int argc, char** argv) try {
     return 2;
   }
   PipelineConfig config;
-  bool loops_on = true;
+  bool loops_on = true, observable = false;
   std::string report;
   for (int i = 2; i < argc; ++i) {
     const std::string kv = argv[i];
     if (kv == "--no-loops") { loops_on = false; continue; }
+    if (kv == "--observable") { observable = true; continue; }
     if (kv == "--edges" && i + 1 < argc) { report = argv[++i]; continue; }
     set_parameter(config, kv);
   }
@@ -54,6 +125,7 @@ int main(int argc, char** argv) try {
       ++count;
     }
   };
+  if (observable) return observable_floor(set, dr, reference, config, loops_on);
   if (report.empty()) {
     add(adjacent_line_candidates(set, reference, config.candidates), best, adjacent);
     if (loops_on) add(loop_candidates(set, reference, config.candidates), best, loops);

@@ -6,12 +6,15 @@
 # 1 % beyond 3 sigma).
 #   bench/robustness_matrix.sh [--scenario small] [--terrains "..."] [--drifts "..."]
 #                              [--seeds "1 2 3"] [--configs "odometry gicp mchs"] [--work DIR]
-#                              [--set "key=value ..."] [--tag NAME]
+#                              [--set "key=value ..."] [--tag NAME] [--floor]
+# --floor adds a `floor` row per bundle: the observable floor (bench_oracle_graph --observable),
+# every candidate pair at the truth with the information its overlap supports.
+# bench/matrix_summary.py turns the rows into means per terrain and drift with issue 31's checks.
 # Bundles go under DIR (default /tmp/bathyslam-robust) and are reused when present; each bundle
 # is deleted after its runs unless --keep is given (a `small` bundle is ~60 MB).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenario=small seeds="1 2 3" configs="odometry gicp mchs" work=/tmp/bathyslam-robust sets="" tag="" keep=0
+scenario=small seeds="1 2 3" configs="odometry gicp mchs" work=/tmp/bathyslam-robust sets="" tag="" keep=0 floor=0
 terrains="lake sandwaves boulders channel slopebreak flat mixed"
 drifts="paper dvl heading-walk compass-step"
 while [[ $# -gt 0 ]]; do
@@ -25,10 +28,12 @@ while [[ $# -gt 0 ]]; do
     --set) sets=$2; shift 2 ;;
     --tag) tag=-$2; shift 2 ;;
     --keep) keep=1; shift ;;
+    --floor) floor=1; shift ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
 bathyslam=${BATHYSLAM:-build/client/bathyslam}
+oracle=${BENCH_ORACLE:-build/bench/bench_oracle_graph}
 mkdir -p "$work"
 set_args=()
 for kv in $sets; do set_args+=(--set "$kv"); done
@@ -47,6 +52,12 @@ for terrain in $terrains; do
         "$bathyslam" process "$bundle" --config "$config" --out "$out" "${set_args[@]}" >/dev/null
         reports+=("$config=$out/report.json")
       done
+      if [[ $floor == 1 ]]; then
+        # The floor's figures in a report's shape, for robustness_rows.py.
+        "$oracle" "$bundle" --observable | awk '$1 == "floor" {printf "{\"trajectory_error_m\": {\"optimized\": {\"rmse\": %s}, \"aligned\": {\"optimized\": {\"rmse\": %s}}}, \"consistency_error_m\": {\"optimized\": {\"rmse\": %s, \"p99\": %s}}, \"timings_s\": {}}\n", $2, $3, $4, $5}' \
+          > "$bundle-floor.json"
+        reports+=("floor=$bundle-floor.json")
+      fi
       python3 bench/robustness_rows.py "$terrain" "$drift" "$seed" "${reports[@]}"
       [[ $keep == 1 ]] || rm -rf "$bundle"
     done

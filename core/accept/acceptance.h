@@ -67,12 +67,22 @@ struct QualityConfig {
   // Hessian (observed_information), instead of the diagonal above; direct_horizontal_share
   // then no longer applies, the Hessian telling flat overlaps from textured ones itself. Needs
   // the registration's Hessian (CoarseToFineConfig::hessian).
-  bool information_from_hessian = false;
+  bool information_from_hessian = true;
   // observed_information's shares: a direction with at least `hessian_full_share` of the
   // best-observed one's (whitened) curvature is fully observed, one with less than
   // `hessian_zero_share` not at all (sounding noise on a flat bottom reaches ~0.01).
   double hessian_full_share = 0.03;
   double hessian_zero_share = 0.012;
+  // A direct registration's horizontal answer is the overlap's only if GICP comes back to it from
+  // other starts: two more, this share of registration.gicp.max_correspondence_m to either side of
+  // the guess, must land within what the answer's information claims (χ²₃ at 99.9 % on x, y and
+  // yaw), or the answer is where its start fell and keeps depth, roll and pitch only. 0: not
+  // checked.
+  double start_check_share = 0.5;
+  // Nor is it the overlap's when the terrain itself fits this many times better (in mean squared
+  // misfit) a few metres away (Uniqueness::nearby_improvement): GICP stopped short of the
+  // bottom of the basin. 4 is an RMS misfit twice the nearby one's. 0: not checked.
+  double max_nearby_improvement = 4.0;
 
   template <typename Field>
   void fields(Field&& field) {
@@ -83,6 +93,8 @@ struct QualityConfig {
     field("information_from_hessian", information_from_hessian, 0, 1);
     field("hessian_full_share", hessian_full_share, 1e-6, 1);
     field("hessian_zero_share", hessian_zero_share, 0, 1);
+    field("start_check_share", start_check_share, 0, 10);
+    field("max_nearby_improvement", max_nearby_improvement, 0, 1e6);
   }
 };
 

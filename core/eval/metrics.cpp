@@ -31,6 +31,13 @@ ErrorStats error_stats(std::vector<double> errors) {
   return s;
 }
 
+double quantile_upper_bound(const std::vector<double>& sorted, double p, double z) {
+  if (sorted.empty()) return 0;
+  const double n = static_cast<double>(sorted.size());
+  const double rank = p * (n - 1) + z * std::sqrt(n * p * (1 - p));
+  return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(std::floor(rank)))];
+}
+
 ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                     const ConsistencyConfig& config) {
   struct Sum {
@@ -79,6 +86,8 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
                                            config.histogram_bins - 1);
     ++report.histogram.counts[bin];
   }
+  std::sort(errors.begin(), errors.end());
+  report.p99_upper = quantile_upper_bound(errors, 0.99, 2.33);
   report.stats = error_stats(std::move(errors));
   return report;
 }
@@ -135,7 +144,14 @@ std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from,
   const Eigen::Matrix3d turn = truth.rotation().transpose() * measured.rotation();
   const double e_yaw = std::atan2(turn(1, 0), turn(0, 0));
   const double horizontal2 = e_xy.dot(information.topLeftCorner<2, 2>() * e_xy);
-  return EdgeErrorSigmas{std::sqrt(std::max(0.0, horizontal2)), std::abs(e_yaw) * std::sqrt(std::max(0.0, information(5, 5)))};
+  const Eigen::Vector3d r(-e_xy.x(), -e_xy.y(), e_yaw);
+  const int axes[3] = {0, 1, 5};
+  double joint2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) joint2 += r(i) * information(axes[i], axes[j]) * r(j);
+  }
+  return EdgeErrorSigmas{std::sqrt(std::max(0.0, horizontal2)), std::abs(e_yaw) * std::sqrt(std::max(0.0, information(5, 5))),
+                         std::sqrt(std::max(0.0, joint2))};
 }
 
 }  // namespace bathyslam

@@ -37,7 +37,16 @@ struct ConsistencyConfig {
 struct ConsistencyReport {
   ErrorStats stats;
   Histogram histogram;
+  // The p99's own uncertainty over the cells: the distribution-free one-sided 99 % upper
+  // confidence bound of the 0.99 quantile, the order statistic at rank n·0.99 + 2.33·√(n·0.99·0.01)
+  // (the binomial's normal approximation). Another sample of this seabed's cells could give a p99
+  // this high with nothing changed.
+  double p99_upper = 0;
 };
+
+// The value at quantile `p` of sorted `values` (the floor rank of p·(n − 1)), and the one-sided
+// upper confidence bound of that quantile at `z` standard deviations of its rank.
+double quantile_upper_bound(const std::vector<double>& sorted, double p, double z);
 
 // Roman & Singh consistency: per cell seen by two or more lines, the largest difference between
 // the lines' mean elevations there. Submaps off the lines (turns) do not take part.
@@ -69,6 +78,12 @@ std::optional<RelativePoseError> relative_pose_error(const SubmapSet& set, int f
 struct EdgeErrorSigmas {
   double horizontal = 0;  // sqrt(e_xy' * information_xy * e_xy)
   double yaw = 0;         // |e_yaw| * sqrt(information_yaw)
+  // x, y and yaw together, with their cross terms: sqrt(r' Ω r), r the graph's residual at the
+  // truth (translation truth − measured at the anchor, rotation measured − truth, as
+  // relative_pose_error.h takes them). Information shaped by a registration's Hessian couples
+  // translation and yaw (a patch pins a rotation about a point of its own), which the two
+  // figures above, each conditional on the other, cannot tell.
+  double joint = 0;
 };
 std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from, int to, const Eigen::Isometry3d& measured,
                                                  const Eigen::Vector3d& anchor,

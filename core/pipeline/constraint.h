@@ -19,6 +19,12 @@ enum class ConstraintType { kOdometry, kAdjacent, kLoop };
 std::string to_string(ConstraintType type);
 ConstraintType parse_constraint_type(const std::string& text);  // throws std::invalid_argument
 
+// What the DR prior said of the uniqueness probe's alternative alignment (robust_backend.h,
+// resolve_alias): nothing to say (the answer is unique, or the rule is off), dead reckoning
+// rules it out, or it does not and the information along it was removed.
+enum class AliasResolution { kNone, kRuledOut, kInformationRemoved };
+std::string to_string(AliasResolution resolution);
+
 struct Constraint {
   ConstraintType type = ConstraintType::kOdometry;
   int from = 0, to = 0;
@@ -28,6 +34,9 @@ struct Constraint {
   // feature-aided path starts GICP from RANSAC's estimate instead).
   Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
   Information6 information = Information6::Identity();
+  // Registrations: the information the registration earned, before dead reckoning's judgement
+  // (resolve_alias) took any away; judged again whenever the DR noise model changes.
+  Information6 registered_information = Information6::Zero();
   RegistrationQuality quality;   // registrations only
   double overlap_fraction = 0;   // registrations only: footprint overlap at candidate time
   std::optional<RegistrationPath> path;  // registrations only
@@ -39,6 +48,13 @@ struct Constraint {
   double competitor_separation_m = 0;
   Uniqueness uniqueness;         // the terrain probed around the answer (register/uniqueness.h)
   double dr_mahalanobis2 = -1;   // the DR gate's statistic (x, y, yaw); negative: not tested
+  // Why the registration's horizontal answer is not the overlap's (register_pairs.cpp,
+  // horizontal_doubt), its horizontal information removed; empty when nothing says so.
+  std::string horizontal_doubt;
+  AliasResolution alias = AliasResolution::kNone;
+  double alias_mahalanobis2 = -1;  // the nearest competitor's DR statistic; negative: not tested
+  // The DR-plausible competitors' RMS distance from the answer along and across their main line.
+  Eigen::Vector2d alias_spread_m = Eigen::Vector2d::Zero();
   Rejection rejection;           // by the registration tests or the DR gate
   Rejection exclusion;           // accepted, then left out of the graph by the back end
   bool accepted() const { return !rejection.rejected(); }
@@ -46,6 +62,13 @@ struct Constraint {
   // Why it is not in the graph (empty when it is).
   const Rejection& why_not() const { return rejection.rejected() ? rejection : exclusion; }
 };
+
+// Whether `information` can bend the survey sideways or turn it: any of x, y and yaw. An edge
+// without (a depth-only edge) cannot make the map horizontally wrong, whatever its error there.
+bool carries_horizontal_information(const Information6& information);
+
+// `information` with x, y and yaw taken out (rows and columns): depth, roll and pitch only.
+Information6 without_horizontal(Information6 information);
 
 // Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information
 // (Table 1's by default).

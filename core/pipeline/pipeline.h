@@ -9,6 +9,7 @@
 
 #include "core/eval/metrics.h"
 #include "core/graph/graph_check.h"
+#include "core/graph/navigation_noise.h"
 #include "core/graph/pose_graph.h"
 #include "core/pipeline/constraint.h"
 #include "core/parallel/cancel.h"
@@ -40,6 +41,9 @@ struct PipelineResult {
   std::vector<Eigen::Isometry3d> optimized_poses;
   std::vector<Constraint> constraints;
   GraphSolution graph;
+  // The survey's own DR noise (navigation_noise.h), which the graph's odometry edges, the gates
+  // and the safety net used; the prior's when not estimated.
+  NavigationNoiseEstimate navigation_noise;
   SafetyNet safety_net;
   std::vector<double> dr_trajectory_errors, trajectory_errors;  // per submap with a reference
   // The same after the best rigid 2D alignment onto the reference (eval/metrics.h).

@@ -30,6 +30,7 @@ PipelineConfig preset_config(Configuration configuration) {
   config.robustness.dr_gate = 0;
   config.robustness.consistency = 0;
   config.robustness.safety_net = 0;
+  config.navigation_noise.estimate = 0;
   if (configuration == Configuration::kOdometry) config.stages.registration = 0;
   return config;
 }
@@ -44,6 +45,9 @@ Plan plan_of(const PipelineConfig& c) {
   plan.dr_gate = plan.registration && c.robustness.dr_gate;
   plan.consistency = plan.registration && c.robustness.consistency;
   plan.safety_net = plan.registration && c.robustness.safety_net;
+  plan.direct_loops = plan.loop_closures && plan.quality_aware && c.direct_loops.enabled;
+  plan.estimate_noise = plan.registration && c.navigation_noise.estimate;
+  plan.alias_from_prior = plan.quality_aware && plan.dr_gate && c.robustness.alias_from_prior;
   plan.threads = c.threads > 0 ? c.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return plan;
 }

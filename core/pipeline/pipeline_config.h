@@ -15,6 +15,7 @@
 #include "core/filter/voxel_filter.h"
 #include "core/graph/graph_check.h"
 #include "core/graph/loop_consistency.h"
+#include "core/graph/navigation_noise.h"
 #include "core/graph/pose_graph.h"
 #include "core/register/coarse_to_fine.h"
 #include "core/submaps/submap.h"
@@ -83,6 +84,32 @@ struct PipelineConfig {
   } uniform_information;
 
   GraphConfig graph;
+  // The DR sigmas above as a prior: the survey's own are estimated from its registrations
+  // (navigation_noise.h) and used by the graph, the gates and the safety net.
+  NavigationNoiseConfig navigation_noise;
+
+  // Loop closures whose overlap has too few features to match (issue 31): registered by the
+  // direct path from the batch's guess and judged as any registration is. Their horizontal
+  // information counts only when dead reckoning's noise between the two submaps keeps that guess
+  // within GICP's reach (its horizontal sigma times `reach_sigmas` within
+  // registration.gicp.max_correspondence_m); beyond it they give depth, roll and pitch. 0: refused,
+  // as in the paper.
+  struct DirectLoops {
+    bool enabled = true;
+    double reach_sigmas = 2.0;
+    // A loop's overlap is where two lines cross, a patch a swath wide: GICP turns it 2-4 degrees
+    // off on weakly textured ground with a good fit (`small` `lake` seeds, within 3 sigma of the
+    // Hessian's yaw). Its position at the anchor is kept; the turn between the lines comes from
+    // several loops' positions and the adjacent lines' strips. 1: keep the Hessian's yaw.
+    bool keep_yaw = false;
+
+    template <typename Field>
+    void fields(Field&& field) {
+      field("enabled", enabled, 0, 1);
+      field("reach_sigmas", reach_sigmas, 0.1, 100);
+      field("keep_yaw", keep_yaw, 0, 1);
+    }
+  } direct_loops;
 
   // The defences against wrong edges (issue 14); all 0 is the paper's literal method.
   struct Robustness {
@@ -94,9 +121,19 @@ struct PipelineConfig {
     // After the solve: lines tested against DR's noise, edges that pull beyond max_pull_sigma
     // dropped one at a time (at most max_drops), and dead reckoning published if that fails.
     bool safety_net = true;
+    // On a periodic seabed a registration's terrain also fits a wavelength away (the uniqueness
+    // probe's alternative). When dead reckoning rules that alternative out (it fails the DR gate)
+    // the answer stands; when it does not, a feature-aided answer is refused and a direct one
+    // loses its information along the alternative's direction. 0: refused or kept regardless.
+    bool alias_from_prior = true;
     GraphCheckConfig line_check;
     double max_pull_sigma = 6.0;
     int max_drops = 20;
+    // The last test, of the map: 1 publishes the solved map unless its consistency RMSE is above
+    // dead reckoning's or its p99 above the upper confidence bound of dead reckoning's p99 (the
+    // quantile's own sampling noise over the cells, ConsistencyReport::p99_upper); 0 (issue 14)
+    // refuses it for any rise of the p99.
+    int publish_rule = 1;
 
     template <typename Field>
     void fields(Field&& field) {
@@ -107,6 +144,8 @@ struct PipelineConfig {
       nested("line_check", line_check, field);
       field("max_pull_sigma", max_pull_sigma, 0.1, 1e6);
       field("max_drops", max_drops, 0, 100000);
+      field("alias_from_prior", alias_from_prior, 0, 1);
+      field("publish_rule", publish_rule, 0, 1);
     }
   } robustness;
 
@@ -126,6 +165,8 @@ struct PipelineConfig {
     nested("quality", quality, field);
     nested("uniform_information", uniform_information, field);
     nested("graph", graph, field);
+    nested("navigation_noise", navigation_noise, field);
+    nested("direct_loops", direct_loops, field);
     nested("robustness", robustness, field);
     nested("consistency", consistency, field);
     field("threads", threads, 0, 1024);
@@ -145,6 +186,9 @@ struct Plan {
   bool loop_closures = false;
   int batch_submaps = 0;       // 0: one batch of every submap
   bool dr_gate = false, consistency = false, safety_net = false;
+  bool direct_loops = false;      // loop closures without features by the direct path, within reach
+  bool estimate_noise = false;    // the survey's own DR noise instead of Table 1's
+  bool alias_from_prior = false;  // aliases dead reckoning rules out do not refuse an answer
   int threads = 0;             // resolved: at least 1
 };
 Plan plan_of(const PipelineConfig& config);

@@ -1,9 +1,13 @@
 #include "core/pipeline/register_pairs.h"
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
+#include <optional>
 
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/robust_backend.h"
+#include "core/types/format.h"
 
 namespace bathyslam {
 namespace {
@@ -38,6 +42,64 @@ Rejection unless_converged(const PairRegistration& reg) {
   return {};
 }
 
+// Empty when the plan registers a featureless loop closure directly and dead reckoning keeps its
+// guess within GICP's reach; otherwise why not, for the report (such a loop keeps depth, roll and
+// pitch only).
+std::string direct_loop_reach(const CandidatePair& pair, const DrNoiseModel& dr, const PipelineConfig& config,
+                              const Plan& plan) {
+  if (!plan.direct_loops) return "direct loop closures off";
+  const double sigma = dr_horizontal_sigma(dr, pair.target, pair.source);
+  const double reach = config.registration.gicp.max_correspondence_m;
+  if (config.direct_loops.reach_sigmas * sigma <= reach) return "";
+  return format("guess beyond reach: %.1f x DR sigma %.2f m > %.1f m", config.direct_loops.reach_sigmas, sigma, reach);
+}
+
+// Squared Mahalanobis distance between two answers of one pair, at the anchor and in yaw, under
+// the x, y and yaw block of `information`.
+double answers_apart2(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const Eigen::Vector3d& anchor,
+                      const Information6& information) {
+  const Eigen::Vector3d moved = a * anchor - b * anchor;
+  const Eigen::Matrix3d turn = a.linear() * b.linear().transpose();
+  const Eigen::Vector3d d(moved.x(), moved.y(), std::atan2(turn(1, 0), turn(0, 0)));
+  const int axes[3] = {0, 1, 5};
+  double m2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) m2 += d(i) * information(axes[i], axes[j]) * d(j);
+  }
+  return m2;
+}
+
+// Why a registration's horizontal answer is not the overlap's, or nullopt when nothing says so:
+// the terrain fits much better a few metres away (quality.max_nearby_improvement), or, on the
+// direct path, GICP does not come back to the answer from two starts either side of the guess
+// across both horizontal axes (quality.start_check_share).
+std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const Information6& information,
+                                            const std::function<PairRegistration(const Eigen::Isometry3d&)>& from,
+                                            const PipelineConfig& config) {
+  const QualityConfig& quality = config.quality;
+  const double improvement = reg.uniqueness.nearby_improvement();
+  if (quality.max_nearby_improvement > 0 && improvement > quality.max_nearby_improvement) {
+    return format("the terrain fits %.1fx better %.1f m away", improvement, reg.uniqueness.nearby_offset_m.norm());
+  }
+  const double spread = quality.start_check_share * config.registration.gicp.max_correspondence_m;
+  if (reg.path != RegistrationPath::kDirect || spread <= 0) return std::nullopt;
+  const double chi2 = config.robustness.pcm.plausibility.chi2_threshold;
+  for (const Eigen::Vector2d side : {Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)}) {
+    const Eigen::Vector2d shift = spread * side.normalized();
+    Eigen::Isometry3d start = reg.coarse;
+    start.pretranslate(Eigen::Vector3d(shift.x(), shift.y(), 0));
+    const PairRegistration again = from(start);
+    const double m2 = answers_apart2(again.registration.source_to_target, reg.registration.source_to_target, reg.anchor,
+                                     information);
+    if (!again.registration.quality.converged || m2 > chi2) {
+      return format("from %.1f m aside GICP lands %.2f m away (Mahalanobis2 %.1f > %.1f)", spread,
+                    (again.registration.source_to_target * reg.anchor - reg.registration.source_to_target * reg.anchor).norm(),
+                    m2, chi2);
+    }
+  }
+  return std::nullopt;
+}
+
 Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Isometry3d>& estimate,
                          const RegistrationInputs& in, const PipelineConfig& config, const Plan& plan,
                          const std::atomic<bool>* cancel) {
@@ -50,6 +112,8 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
   const Cloud& source = in.clouds.empty() ? kNone : *in.clouds[pair.source];
   auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source, cancel); };
   PairRegistration reg;
+  bool direct_loop = false;  // a loop closure the switch sends down the direct path
+  std::string loop_reach;    // why such a loop is out of the direct path's reach; empty: within it
   if (plan.features) {
     // RANSAC reproducible per pair, whatever thread or batch registers it.
     const uint64_t seed = config.registration.ransac.seed ^
@@ -57,11 +121,14 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
     const SubmapFeatures& target_features = in.features[pair.target];
     const SubmapFeatures& source_features = in.features[pair.source];
     const CoarseStart coarse = coarse_start(target_features, source_features, guess, config.registration, seed);
-    // Acceptance lets only the feature-aided path close a loop (rejection_of): a loop the switch
-    // sends down the direct path is refused whatever GICP would answer, so GICP is not run (a
-    // third of `lake`'s registrations).
-    if (plan.quality_aware && candidate.type == ConstraintType::kLoop && coarse.path == RegistrationPath::kDirect) {
+    // A loop the switch sends down the direct path: without direct loops acceptance refuses it
+    // whatever GICP would answer, so GICP is not run. With them, beyond GICP's reach of its
+    // guess (direct_loop_reach) it is registered for its depth, roll and pitch only.
+    direct_loop = candidate.type == ConstraintType::kLoop && coarse.path == RegistrationPath::kDirect;
+    if (plan.quality_aware && direct_loop) loop_reach = direct_loop_reach(pair, in.dr, config, plan);
+    if (plan.quality_aware && direct_loop && !plan.direct_loops) {
       reg = unregistered(coarse, guess);
+      reg.why += ", " + loop_reach;
     } else {
       reg = register_from_start(coarse, target, source, target_features, source_features, config.registration,
                                 with_hessian, prepared());
@@ -72,16 +139,37 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
   }
   Constraint c = constraint_of(candidate, reg, guess);
   if (plan.quality_aware) {
-    c.rejection = rejection_of(reg, guess, config.acceptance, candidate.type == ConstraintType::kLoop);
-    const Eigen::Matrix3d level_from_target =
-        level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
-    if (c.accepted()) c.information = quality_information(reg, config.quality, level_from_target);
+    // With the prior's word on aliases, resolve_alias applies the uniqueness test instead.
+    AcceptanceConfig acceptance = config.acceptance;
+    if (plan.alias_from_prior) acceptance.min_distinctness = 0;
+    c.rejection = rejection_of(reg, guess, acceptance, candidate.type == ConstraintType::kLoop && !plan.direct_loops);
+    if (c.accepted()) {
+      const Eigen::Matrix3d level_from_target =
+          level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
+      c.information = quality_information(reg, config.quality, level_from_target);
+      if (direct_loop && !config.direct_loops.keep_yaw) c.information.row(5).setZero(), c.information.col(5).setZero();
+      const auto from = [&](const Eigen::Isometry3d& start) {
+        return register_direct(target, source, start, config.registration.gicp, config.registration.crop_margin_m, false,
+                               prepared());
+      };
+      std::optional<std::string> doubt;
+      if (!loop_reach.empty()) {
+        doubt = loop_reach;
+      } else if (carries_horizontal_information(c.information)) {
+        doubt = horizontal_doubt(reg, c.information, from, config);
+      }
+      if (doubt) {
+        c.information = without_horizontal(c.information);
+        c.horizontal_doubt = *doubt;
+      }
+    }
   } else {
     c.rejection = unless_converged(reg);
     c.information = information_from_sigmas(config.uniform_information.sigma_translation_m,
                                              config.uniform_information.sigma_rotation_rad);
   }
-  if (plan.dr_gate) gate_against_dead_reckoning(c, in.dr, in.dr_poses, config.robustness.pcm.plausibility);
+  c.registered_information = c.information;
+  judge_with_prior(c, in.dr, in.dr_poses, config, plan);
   return c;
 }
 

@@ -20,7 +20,8 @@ struct Candidate {
 
 // What registration reads besides the pairs: per submap its filtered cloud for PCL's GICP
 // (gicp.engine 0; empty with ours), or prepared once for ours when it first registers
-// (gicp.engine 1), and (with plan.features) its features; dead reckoning for the DR gate.
+// (gicp.engine 1), and (with plan.features) its features; dead reckoning and its noise model
+// (the survey's estimate so far) for the DR gate, the aliases and the direct loops' reach.
 struct RegistrationInputs {
   const std::vector<Cloud::Ptr>& clouds;
   GicpCloudCache& prepared;

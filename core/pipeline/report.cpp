@@ -4,6 +4,7 @@
 
 #include "core/eval/plots.h"
 #include "core/io/file_bytes.h"
+#include "core/types/format.h"
 
 namespace bathyslam {
 namespace {
@@ -94,6 +95,7 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       gates["dr_mahalanobis2"] = c.dr_mahalanobis2;
       gates["dr_threshold"] = r.config.robustness.pcm.plausibility.chi2_threshold;
     }
+    if (!c.horizontal_doubt.empty()) gates["horizontal_doubt"] = c.horizontal_doubt;
     if (c.path == RegistrationPath::kFeatureAided) {
       gates["competitor_inliers"] = c.competitor_inliers;
       gates["competitor_separation_m"] = c.competitor_separation_m;
@@ -105,6 +107,11 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       gates["cost_at_answer_m2"] = c.uniqueness.cost_at_answer_m2;
       gates["alternative_cost_m2"] = c.uniqueness.alternative_cost_m2;
       gates["typical_cost_m2"] = c.uniqueness.typical_cost_m2;
+      if (c.alias != AliasResolution::kNone) {
+        gates["alias"] = to_string(c.alias);
+        gates["alias_dr_mahalanobis2"] = c.alias_mahalanobis2;
+        if (c.alias == AliasResolution::kInformationRemoved) gates["alias_spread_m"] = {c.alias_spread_m.x(), c.alias_spread_m.y()};
+      }
     }
     j["gates"] = gates;
     auto error_json = [&](const Eigen::Isometry3d& measured) -> nlohmann::json {
@@ -127,7 +134,7 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       j["guess_error_vs_reference"] = error_json(c.guess);
       if (c.in_graph()) {
         const auto sigmas = edge_error_sigmas(r.submaps, c.from, c.to, c.measured, c.anchor, c.information);
-        j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}};
+        j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}, {"joint", sigmas->joint}};
       }
     }
     list.push_back(std::move(j));
@@ -192,6 +199,21 @@ ReportSummary report_summary_from_json(const nlohmann::json& j) {
   }
 }
 
+namespace {
+
+nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
+  return {{"estimated", e.estimated},
+          {"innovations", e.innovations},
+          {"translation_scale", e.translation_scale},
+          {"yaw_scale", e.yaw_scale},
+          {"dr_sigma_translation_m", {e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_translation_m.y(),
+                                      e.graph.dr_sigma_translation_m.z()}},
+          {"dr_sigma_rotation_rad", {e.graph.dr_sigma_rotation_rad.x(), e.graph.dr_sigma_rotation_rad.y(),
+                                     e.graph.dr_sigma_rotation_rad.z()}}};
+}
+
+}  // namespace
+
 nlohmann::json report_json(const PipelineResult& r) {
   const ReportSummary s = report_summary(r);
   nlohmann::json histogram = {{"bin_width_m", s.histogram.bin_width},
@@ -208,6 +230,7 @@ nlohmann::json report_json(const PipelineResult& r) {
           {"constraints", {{"by_type", counts_json(s.by_type)}, {"by_path", counts_json(s.by_path)},
                            {"switch_decisions", switch_decisions(r)}}},
           {"registrations", registrations_json(r)},
+          {"navigation_noise", navigation_noise_json(r.navigation_noise)},
           {"graph", {{"converged", r.graph.converged}, {"iterations", r.graph.iterations},
                      {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost},
                      {"batch_solves", r.batch_solves}, {"batch_solve_s", r.batch_solve_seconds}}},
@@ -243,6 +266,13 @@ std::string report_text(const PipelineResult& r) {
                 accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse, c.rmse, c.p95, c.p99, c.count,
                 c0.rmse);
   std::string summary = text;
+  if (r.navigation_noise.estimated) {
+    const NavigationNoiseEstimate& e = r.navigation_noise;
+    summary += format("navigation noise   estimated from %.0f registrations: %.3f m and %.5f rad per submap step "
+                      "(Table 1 x %.3f, x %.3f)\n",
+                      static_cast<double>(e.innovations), e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_rotation_rad.z(),
+                      e.translation_scale, e.yaw_scale);
+  }
   if (r.safety_net.ran) summary += "safety net         " + r.safety_net.verdict + "\n";
   for (const std::string& d : r.safety_net.dropped) summary += "  dropped " + d + "\n";
   return summary;

@@ -16,6 +16,28 @@ namespace bathyslam {
 void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                  const PlausibilityConfig& config);
 
+// Dead reckoning's horizontal standard deviation between two submaps along its worst direction:
+// how far from the truth a guess it gives may be.
+double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
+
+// The uniqueness test with dead reckoning's word (robustness.alias_from_prior), for an accepted
+// registration with its information. Other offsets whose terrain fits nearly as well as the
+// answer's (the probe's competitors) do not refuse the answer when each of them fails the DR gate:
+// dead reckoning has chosen between them. When some do not, a feature-aided answer is refused
+// (as is one whose overlap was too small to probe) and a direct one keeps no horizontal
+// information along the directions of those it allows, which is what its overlap cannot tell.
+// `level_from_target` turns the target submap's frame, where the offsets lie, into the edge's
+// residual frame.
+void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                   const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target);
+
+// Everything about a registration that rests on dead reckoning's noise model, decided anew:
+// the alias rule (plan.alias_from_prior) and the DR gate (plan.dr_gate), from the registration's
+// own verdict and information. A registration these refused before is tested again, so a
+// registration judged under one noise model can be judged under a better one.
+void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                      const PipelineConfig& config, const Plan& plan);
+
 // Pairwise consistency (PCM) over the accepted registrations that carry horizontal information
 // (the ones that can bend the survey); the rest of the accepted set is left out of the graph
 // with the reason. Selected again from all of them on each call: a later batch may confirm a
@@ -38,8 +60,11 @@ GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::ve
 void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config);
 
 // The last test needs no reference: a map is published only when it agrees with itself better
-// than dead reckoning's does (consistency RMSE and p99 over the cells two lines share). Otherwise
-// the data do not support the solution, and dead reckoning is published, the report saying why.
+// than dead reckoning's does as a whole: its consistency RMSE over the cells two lines share no
+// higher, and its p99 no higher than dead reckoning's could be by the sampling of its cells alone
+// (robustness.publish_rule 1, ConsistencyReport::p99_upper; 0: no higher than dead reckoning's
+// p99). Otherwise the data do not support the solution, and dead reckoning is published, the
+// report saying why.
 // `r.consistency` and `r.dr_consistency` must be filled; the first is replaced on a fall-back.
 void fall_back_unless_more_consistent(PipelineResult& r);
 

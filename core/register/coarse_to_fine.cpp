@@ -51,6 +51,28 @@ PairRegistration register_direct_prepared(const GicpCloud& target, const GicpClo
 
 }  // namespace
 
+PairRegistration observe_at(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
+                            const GicpConfig& gicp, double crop_margin_m) {
+  const GicpOverlap overlap = gicp_overlap(target, source, source_to_target, crop_margin_m, gicp.threads);
+  PairRegistration r;
+  r.coarse = source_to_target;
+  r.registration.source_to_target = source_to_target;
+  r.anchor = source_centroid(source, overlap);
+  const auto too_few = static_cast<std::size_t>(gicp.neighbours + 1);
+  if (overlap.target_points < too_few || overlap.source_points.size() < too_few) return r;
+  const int threads = std::max(gicp.threads, 1);
+  r.registration.quality =
+      sampled_overlap_quality(target, source, overlap, source_to_target, gicp.max_correspondence_m, threads);
+  r.registration.quality.converged = true;
+  r.inlier_ratio = r.registration.quality.fitness;
+  const GicpLinearisation at = linearise_gicp(target, source, overlap, source_to_target, source_to_target * r.anchor,
+                                              gicp.max_correspondence_m, threads, true);
+  r.hessian.hessian = at.hessian;
+  r.hessian.regularisation = at.regularisation;
+  r.hessian.correspondences = at.correspondences;
+  return r;
+}
+
 PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source,
                            const std::atomic<bool>* cancel) {
   if (gicp.engine != 1) return {};

@@ -139,6 +139,12 @@ PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& sourc
                                          const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false,
                                          PreparedPair prepared = {});
 
+// What the overlap of two prepared submaps observes at `source_to_target`, without registering:
+// its quality, its anchor and the GICP cost's Hessian there, on the direct path. At the truth
+// this is the information the seabed supports (bench_oracle_graph --observable).
+PairRegistration observe_at(const GicpCloud& target, const GicpCloud& source, const Eigen::Isometry3d& source_to_target,
+                            const GicpConfig& gicp, double crop_margin_m);
+
 // Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid and, if
 // `with_hessian`, the cost's Hessian there.
 PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,

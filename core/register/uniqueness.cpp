@@ -8,6 +8,8 @@
 namespace bathyslam {
 namespace {
 
+constexpr double kNoiseFloorM2 = 4e-4;  // distinctness's default floor: (2 cm)²
+
 // Where a moved source cell falls on the target grid: the target cell below-left of it and the
 // bilinear weights within. An offset of whole target cells moves the cell and keeps the weights,
 // so the probe's offsets (a step of 1 m over 0.5 m cells) reuse one set of samples.
@@ -87,6 +89,26 @@ double Uniqueness::distinctness(double noise_floor_m2) const {
   return alternative_cost_m2 / std::max(cost_at_answer_m2, noise_floor_m2);
 }
 
+double Uniqueness::nearby_improvement(double noise_floor_m2) const {
+  if (!probed) return 1.0;
+  return std::max(cost_at_answer_m2, noise_floor_m2) / std::max(nearby_cost_m2, noise_floor_m2);
+}
+
+bool Uniqueness::unique() const {
+  return probed && std::find(competitors.begin(), competitors.end(), true) == competitors.end();
+}
+
+std::vector<Eigen::Vector2d> Uniqueness::competitor_offsets() const {
+  std::vector<Eigen::Vector2d> offsets;
+  const int side = 2 * reach + 1;
+  for (std::size_t k = 0; k < competitors.size(); ++k) {
+    if (!competitors[k]) continue;
+    const int i = static_cast<int>(k % side) - reach, j = static_cast<int>(k / side) - reach;
+    offsets.emplace_back(i * step_m, j * step_m);
+  }
+  return offsets;
+}
+
 Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source, const Eigen::Isometry3d& source_to_target,
                             const UniquenessConfig& config) {
   Uniqueness u;
@@ -134,6 +156,30 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
   if (!local.empty()) {
     std::nth_element(local.begin(), local.begin() + local.size() / 2, local.end());
     u.local_cost_m2 = local[local.size() / 2];
+  }
+
+  // Whole cells within the exclusion radius reuse the answer's samples.
+  u.nearby_cost_m2 = u.cost_at_answer_m2;
+  const int near_cells = static_cast<int>(std::floor(config.exclusion_m / target.cell_m));
+  for (int dr = -near_cells; dr <= near_cells; ++dr) {
+    for (int dc = -near_cells; dc <= near_cells; ++dc) {
+      if ((dc == 0 && dr == 0) || std::hypot(dc, dr) * target.cell_m >= config.exclusion_m) continue;
+      const Cost c = cost_at(target, overlap_samples, dc, dr);
+      if (c.cells < min_cells || c.mean_square >= u.nearby_cost_m2) continue;
+      u.nearby_cost_m2 = c.mean_square;
+      u.nearby_offset_m = Eigen::Vector2d(dc, dr) * target.cell_m;
+    }
+  }
+
+  u.reach = reach;
+  u.step_m = config.step_m;
+  u.competitors.assign(cost.size(), false);
+  const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, kNoiseFloorM2);
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);
+      u.competitors[k] = std::hypot(i, j) * config.step_m >= config.exclusion_m && cost[k] < competing;
+    }
   }
 
   u.alternative_cost_m2 = u.typical_cost_m2;

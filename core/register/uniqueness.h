@@ -5,6 +5,8 @@
 // agreeing: RANSAC sees no competitor and GICP refines the alias to a good residual. The probe
 // slides the source's terrain over the target's around the answer and asks whether another
 // horizontal offset fits nearly as well.
+#include <vector>
+
 #include <Eigen/Geometry>
 
 #include "core/features/terrain_grid.h"
@@ -24,6 +26,10 @@ struct UniquenessConfig {
   // direct path keeps its guess's horizontal error: p50 2-6 m on `lake`): the relief within this
   // radius is how wrong a depth measured at the wrong place can be.
   double local_radius_m = 5.0;
+  // An offset outside the exclusion radius whose misfit is under this many times the answer's
+  // (floored as in `distinctness`) competes with it (Uniqueness::competitors): the same ratio as
+  // acceptance.min_distinctness, an RMS misfit under 5x the answer's.
+  double competitor_ratio = 25.0;
   template <typename Field>
   void fields(Field&& field) {
     field("search_radius_m", search_radius_m, 1, 1000);
@@ -31,6 +37,7 @@ struct UniquenessConfig {
     field("exclusion_m", exclusion_m, 0, 1000);
     field("min_overlap_share", min_overlap_share, 0.01, 1);
     field("local_radius_m", local_radius_m, 0, 1000);
+    field("competitor_ratio", competitor_ratio, 1, 1e6);
   }
 };
 
@@ -40,12 +47,31 @@ struct Uniqueness {
   double typical_cost_m2 = 0;    // median over all offsets probed: what a misalignment costs (reported)
   double local_cost_m2 = 0;      // median over the offsets within local_radius_m
   double alternative_cost_m2 = 0;  // the lowest local minimum outside the exclusion radius
+  // The lowest cost within the exclusion radius, probed a grid cell apart: an answer at the
+  // bottom of its own basin fits about as well as anything this near it, one that is not (GICP
+  // stopped on a slope or in a dent of its cost) fits many times worse.
+  double nearby_cost_m2 = 0;
+  Eigen::Vector2d nearby_offset_m = Eigen::Vector2d::Zero();
   Eigen::Vector2d alternative_offset_m = Eigen::Vector2d::Zero();
   // How much worse the best alternative fits than the answer: the ratio of their mean squared
   // misfits, the answer's floored at `noise_floor_m2`. About 1 when another offset fits as well
   // (a periodic or flat seabed); in the hundreds on textured ground, where only the answer
   // leaves nothing but sounding noise.
   double distinctness(double noise_floor_m2 = 4e-4) const;
+  // How many times better the best nearby offset fits than the answer (both floored at
+  // `noise_floor_m2`): about 1 at the bottom of the basin.
+  double nearby_improvement(double noise_floor_m2 = 4e-4) const;
+  // Every offset that competes with the answer (UniquenessConfig::competitor_ratio), as a mask
+  // over the probe's square of (2·reach + 1)² offsets `step_m` apart, row by row from
+  // (−reach, −reach): a bit each, so that a flat bottom, where every offset competes, costs
+  // 300 bytes and not 30 KB.
+  int reach = 0;
+  double step_m = 0;
+  std::vector<bool> competitors;
+  // The competing offsets (target frame, m).
+  std::vector<Eigen::Vector2d> competitor_offsets() const;
+  // Probed, and nothing within reach competes: the answer is the terrain's, whatever the start.
+  bool unique() const;
 };
 
 // `source_to_target` maps the source submap frame into the target's (z down); the grids are the

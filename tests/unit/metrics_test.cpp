@@ -92,5 +92,16 @@ TEST(TrajectoryError, AlignmentRemovesARigidTurnButNotAShapeError) {
   EXPECT_LT(aligned.max, 4.0 + 1e-6);
 }
 
+TEST(Metrics, TheP99sUpperBoundLiesJustAboveItByTheQuantilesOwnSamplingNoise) {
+  std::vector<double> values;
+  for (int i = 1; i <= 10000; ++i) values.push_back(i);
+  // Rank 0.99 · 9999 + 2.33 · √(10000 · 0.99 · 0.01) = 9899.0 + 23.2.
+  EXPECT_DOUBLE_EQ(quantile_upper_bound(values, 0.99, 2.33), 9923.0);
+  EXPECT_DOUBLE_EQ(quantile_upper_bound(values, 0.99, 0.0), error_stats(values).p99);
+  const std::vector<double> few = {1, 2, 3};
+  EXPECT_DOUBLE_EQ(quantile_upper_bound(few, 0.99, 2.33), 3.0) << "never past the largest";
+  EXPECT_DOUBLE_EQ(quantile_upper_bound({}, 0.99, 2.33), 0.0);
+}
+
 }  // namespace
 }  // namespace bathyslam

@@ -244,6 +244,70 @@ TEST_F(MchsPipeline, ReportCarriesTheResult) {
   EXPECT_EQ(parameters(again), parameters(r.config));
 }
 
+// Issue 31 on a seabed `lake`'s mounds do not make: patches of sand waves, boulders, a channel, a
+// slope break and flat mud, under a heading random walk. Loops without features close by the
+// direct path, direct edges carry what their overlap observes, the noise comes from the survey;
+// the map must gain what the plain `gicp` baseline gains and stay within its own information.
+class MixedSeabed : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    sim::SimulationConfig simulation;
+    simulation.terrain.kind = sim::TerrainKind::kMixed;
+    simulation.drift = sim::DriftModel::kHeadingWalk;
+    survey_ = new Survey(sim::simulate(simulation).survey);
+    for (Configuration c : {Configuration::kOdometry, Configuration::kGicp, Configuration::kMchs}) {
+      results_[static_cast<int>(c)] = new PipelineResult(run_pipeline(*survey_, preset_config(c)));
+    }
+  }
+  static void TearDownTestSuite() {
+    for (PipelineResult*& r : results_) delete r, r = nullptr;
+    delete survey_;
+  }
+  static const PipelineResult& result(Configuration c) { return *results_[static_cast<int>(c)]; }
+  static const Survey& survey() { return *survey_; }
+
+ private:
+  static Survey* survey_;
+  static PipelineResult* results_[3];
+};
+Survey* MixedSeabed::survey_ = nullptr;
+PipelineResult* MixedSeabed::results_[3] = {};
+
+TEST_F(MixedSeabed, MchsMakesTheMapAsConsistentAsGicpDoesAndTheTrajectoryNoWorse) {
+  const PipelineResult &odometry = result(Configuration::kOdometry), &gicp = result(Configuration::kGicp),
+                       &mchs = result(Configuration::kMchs);
+  EXPECT_FALSE(mchs.safety_net.fell_back) << mchs.safety_net.verdict;
+  EXPECT_LE(mchs.consistency.stats.rmse, 1.05 * gicp.consistency.stats.rmse);
+  EXPECT_LT(mchs.consistency.stats.rmse, 0.5 * odometry.consistency.stats.rmse);
+  EXPECT_LE(rmse(mchs.trajectory_errors), 1.05 * rmse(odometry.trajectory_errors));
+  EXPECT_TRUE(mchs.navigation_noise.estimated);
+}
+
+TEST_F(MixedSeabed, EveryAcceptedEdgeLiesWithinSixSigmaOfItsInformation) {
+  const PipelineResult& mchs = result(Configuration::kMchs);
+  int direct_loops = 0;
+  for (const Constraint& c : mchs.constraints) {
+    if (c.type == ConstraintType::kOdometry || !c.in_graph()) continue;
+    direct_loops += c.type == ConstraintType::kLoop && c.path == RegistrationPath::kDirect;
+    const auto sigmas = edge_error_sigmas(mchs.submaps, c.from, c.to, c.measured, c.anchor, c.information);
+    ASSERT_TRUE(sigmas);
+    EXPECT_LT(sigmas->joint, 6.0) << to_string(c.type) << " " << c.from << "->" << c.to;
+  }
+  EXPECT_GT(direct_loops, 0) << "featureless loops close by the direct path";
+}
+
+TEST_F(MixedSeabed, WithoutDirectLoopsNoFeaturelessLoopCloses) {
+  PipelineConfig config = preset_config(Configuration::kMchs);
+  config.direct_loops.enabled = false;
+  const PipelineResult r = run_pipeline(survey(), config);
+  for (const Constraint& c : r.constraints) {
+    if (c.type == ConstraintType::kLoop && c.path == RegistrationPath::kDirect) {
+      EXPECT_FALSE(c.accepted()) << c.from << "->" << c.to;
+      EXPECT_EQ(c.rejection.kind, RejectionKind::kLoopWithoutFeatures);
+    }
+  }
+}
+
 TEST(Pipeline, OneAndTwoThreadsGiveTheSameResult) {
   const PipelineResult one = run(Configuration::kMchs, 1), two = run(Configuration::kMchs, 2);
   ASSERT_EQ(one.constraints.size(), two.constraints.size());

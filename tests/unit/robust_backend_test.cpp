@@ -165,5 +165,143 @@ TEST(SafetyNet, PublishesDeadReckoningWhenTheSolvedMapIsLessConsistent) {
   EXPECT_DOUBLE_EQ(r.consistency.stats.rmse, 0.30);
 }
 
+// The solved map is judged as a whole (robustness.publish_rule 1): a p99 a little above dead
+// reckoning's but within what the sampling of its cells allows does not throw away a map whose
+// RMSE fell by a third; beyond that bound, or under the old rule, dead reckoning is published.
+TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
+  Survey2Lines s = two_lines(10, 6);
+  PipelineResult& r = s.result;
+  r.optimized_poses = s.truth;
+  r.graph.poses = s.truth;
+  r.safety_net.ran = true;
+  r.dr_consistency.stats.rmse = 0.30;
+  r.dr_consistency.stats.p99 = 0.90;
+  r.dr_consistency.p99_upper = 0.97;
+  r.consistency.stats.rmse = 0.20;
+  r.consistency.stats.p99 = 0.93;
+  PipelineResult whole = r;
+  fall_back_unless_more_consistent(whole);
+  EXPECT_FALSE(whole.safety_net.fell_back) << whole.safety_net.verdict;
+  EXPECT_TRUE(whole.optimized_poses[5].isApprox(s.truth[5]));
+
+  PipelineResult old_rule = r;
+  old_rule.config.robustness.publish_rule = 0;
+  fall_back_unless_more_consistent(old_rule);
+  EXPECT_TRUE(old_rule.safety_net.fell_back);
+
+  PipelineResult beyond = r;
+  beyond.consistency.stats.p99 = 1.00;
+  fall_back_unless_more_consistent(beyond);
+  EXPECT_TRUE(beyond.safety_net.fell_back);
+  EXPECT_NE(beyond.safety_net.verdict.find("sampling noise"), std::string::npos) << beyond.safety_net.verdict;
+}
+
+// A probe result by hand: the answer fits at 1e-3 m², and every offset in `competing` fits
+// nearly as well (a 49 x 49 square of offsets 1 m apart).
+Uniqueness probed_with(const std::vector<Eigen::Vector2d>& competing) {
+  Uniqueness u;
+  u.probed = true;
+  u.cost_at_answer_m2 = u.nearby_cost_m2 = 1e-3;
+  u.reach = 24;
+  u.step_m = 1.0;
+  u.competitors.assign(49 * 49, false);
+  for (const Eigen::Vector2d& o : competing) {
+    u.competitors[static_cast<std::size_t>((o.y() + 24) * 49 + (o.x() + 24))] = true;
+  }
+  u.alternative_cost_m2 = 2e-3;
+  return u;
+}
+
+// Sand waves 10 m apart, crests along y: the terrain also fits 10 and 20 m away across them.
+std::vector<Eigen::Vector2d> sand_wave_aliases() { return {{-20, 0}, {-10, 0}, {10, 0}, {20, 0}}; }
+
+Constraint direct_registration(const Survey2Lines& s, int from, int to, const Uniqueness& u) {
+  Constraint c = registration(s, from, to);
+  c.type = ConstraintType::kAdjacent;
+  c.path = RegistrationPath::kDirect;
+  c.uniqueness = u;
+  return c;
+}
+
+// Nine DR steps of 0.006 rad (the fixture's own heading noise) keep the pair within about a metre
+// and a half: aliases 10 m away are ruled out. Table 1's 5 m a step cannot rule them out.
+GraphConfig survey_noise() {
+  GraphConfig g;
+  g.dr_sigma_translation_m = {0.01, 0.01, 1.0};
+  g.dr_sigma_rotation_rad = {1e-4, 1e-4, 0.006};
+  return g;
+}
+
+TEST(AliasFromPrior, ADirectAnswerAcrossSandWavesKeepsItsInformationWhenDeadReckoningRulesTheAliasesOut) {
+  const Survey2Lines s = two_lines(20, 7);
+  Constraint c = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
+  const Information6 before = c.information;
+  resolve_alias(c, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  EXPECT_TRUE(c.accepted());
+  EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+  EXPECT_GT(c.alias_mahalanobis2, PlausibilityConfig{}.chi2_threshold);
+  EXPECT_TRUE(c.information.isApprox(before));
+}
+
+TEST(AliasFromPrior, ADirectAnswerLosesItsInformationAcrossTheCrestsWhereDeadReckoningAllowsTheAliases) {
+  const Survey2Lines s = two_lines(20, 7);
+  Constraint c = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
+  resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  EXPECT_TRUE(c.accepted());
+  EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
+  EXPECT_NEAR(c.information(0, 0), 0.0, 1e-9) << "across the crests: what the aliases leave open";
+  EXPECT_GT(c.information(1, 1), 50.0) << "along them: the registration's own";
+  EXPECT_NEAR(c.information(5, 5), 0.0, 1e-9) << "nor its turn";
+
+  // Competitors all around (a weakly textured patch): nothing horizontal is known.
+  std::vector<Eigen::Vector2d> around;
+  for (int x = -6; x <= 6; ++x) {
+    for (int y = -6; y <= 6; ++y) {
+      if (std::hypot(x, y) >= 3) around.emplace_back(x, y);
+    }
+  }
+  Constraint patch = direct_registration(s, 15, 24, probed_with(around));
+  resolve_alias(patch, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  for (int k : {0, 1, 5}) EXPECT_NEAR(patch.information(k, k), 0.0, 1e-9) << k;
+  EXPECT_GT(patch.information(2, 2), 50.0) << "depth stays";
+}
+
+TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnAlias) {
+  const Survey2Lines s = two_lines(20, 7);
+  Constraint loose = registration(s, 15, 24), tight = registration(s, 15, 24);
+  loose.uniqueness = tight.uniqueness = probed_with(sand_wave_aliases());
+  resolve_alias(loose, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  resolve_alias(tight, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  EXPECT_EQ(loose.rejection.kind, RejectionKind::kNotUnique) << loose.rejection.text();
+  EXPECT_TRUE(tight.accepted()) << tight.rejection.text();
+  EXPECT_EQ(tight.alias, AliasResolution::kRuledOut);
+
+  Constraint unprobed = registration(s, 15, 24);
+  resolve_alias(unprobed, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity());
+  EXPECT_EQ(unprobed.rejection.kind, RejectionKind::kNotUnique) << "too little overlap to probe";
+}
+
+// A registration refused under Table 1's noise is judged again under the survey's: the prior's
+// verdicts are not final.
+TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
+  const Survey2Lines s = two_lines(20, 7);
+  Constraint c = registration(s, 15, 24);
+  c.uniqueness = probed_with(sand_wave_aliases());
+  c.registered_information = c.information;
+  PipelineConfig config;
+  const Plan plan = plan_of(config);
+  judge_with_prior(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, config, plan);
+  ASSERT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
+  judge_with_prior(c, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, config, plan);
+  EXPECT_TRUE(c.accepted()) << c.rejection.text();
+  EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+}
+
 }  // namespace
 }  // namespace bathyslam
