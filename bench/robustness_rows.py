@@ -19,13 +19,30 @@ import sys
 
 
 def claimed_error(registration):
-    """A loop's error (m, deg) in what its information claims to know: its position if a
-    horizontal sigma is under 2 m, its turn if its yaw sigma is under 2 deg. A depth-only edge
-    (the direct path on flat ground) says nothing of where it lies, and its horizontal values are
-    its guess's; likewise a loop without yaw information says nothing of its turn."""
+    """A loop's error (m, deg) in what its information claims to know: its position along the
+    horizontal directions whose sigma is under 2 m, its turn if its yaw sigma is under 2 deg. A
+    depth-only edge (the direct path on flat ground) says nothing of where it lies, and its
+    horizontal values are its guess's; an edge across a channel says nothing of where along it;
+    a loop without yaw information says nothing of its turn."""
     info = registration.get("information_diagonal", [1, 1, 1, 1, 1, 1])
     e = registration["error_vs_reference"]
-    position = e["horizontal_m"] if max(info[0], info[1]) >= 1 / 2.0**2 else 0.0
+    sigmas = registration.get("error_sigmas", {})
+    if "error_at_anchor_m" in sigmas and "information" in registration:
+        full = registration["information"]
+        xx, xy, yy = full[0], full[1], full[7]
+        error = sigmas["error_at_anchor_m"]
+        position2 = 0.0
+        half_trace, root = (xx + yy) / 2, math.sqrt(((xx - yy) / 2) ** 2 + xy**2)
+        for value in (half_trace + root, half_trace - root):  # eigenvalues of the x, y block
+            if value < 1 / 2.0**2:
+                continue
+            # its eigenvector, and the error along it
+            v = (xy, value - xx) if abs(xy) > 1e-12 else ((1.0, 0.0) if abs(value - xx) < abs(value - yy) else (0.0, 1.0))
+            norm = math.hypot(*v)
+            position2 += ((error[0] * v[0] + error[1] * v[1]) / norm) ** 2
+        position = math.sqrt(position2)
+    else:
+        position = e["horizontal_m"] if max(info[0], info[1]) >= 1 / 2.0**2 else 0.0
     turn = abs(e["yaw_deg"]) if info[5] >= 1 / math.radians(2.0) ** 2 else 0.0
     return position, turn
 

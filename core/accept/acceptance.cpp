@@ -31,8 +31,8 @@ Rejection rejection_of(const PairRegistration& r, const Eigen::Isometry3d& guess
   using enum RejectionKind;
   const RegistrationQuality& q = r.registration.quality;
   if (loop_closure && r.path == RegistrationPath::kDirect) return {kLoopWithoutFeatures, r.why};
-  if (q.overlap_points == 0) return {kNoOverlap, ""};
-  if (!q.converged) return {kNotConverged, ""};
+  if (q.overlap_points == 0) return {kNoOverlap, "no source sounding within the gate of a target sounding"};
+  if (!q.converged) return {kNotConverged, "GICP stopped unconverged"};
   if (r.inlier_ratio < config.min_inlier_ratio) return {kInlierRatio, format("%.2f < %.2f", r.inlier_ratio, config.min_inlier_ratio)};
   if (q.overlap_mse_m2 > config.max_overlap_mse_m2) {
     return {kOverlapMse, format("%.2f m2 > %.2f m2", q.overlap_mse_m2, config.max_overlap_mse_m2)};

@@ -151,7 +151,7 @@ std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from,
     for (int j = 0; j < 3; ++j) joint2 += r(i) * information(axes[i], axes[j]) * r(j);
   }
   return EdgeErrorSigmas{std::sqrt(std::max(0.0, horizontal2)), std::abs(e_yaw) * std::sqrt(std::max(0.0, information(5, 5))),
-                         std::sqrt(std::max(0.0, joint2))};
+                         std::sqrt(std::max(0.0, joint2)), e_xy};
 }
 
 }  // namespace bathyslam

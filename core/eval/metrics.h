@@ -84,6 +84,7 @@ struct EdgeErrorSigmas {
   // translation and yaw (a patch pins a rotation about a point of its own), which the two
   // figures above, each conditional on the other, cannot tell.
   double joint = 0;
+  Eigen::Vector2d at_anchor_m = Eigen::Vector2d::Zero();  // the horizontal error itself (measured − truth)
 };
 std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from, int to, const Eigen::Isometry3d& measured,
                                                  const Eigen::Vector3d& anchor,

@@ -26,7 +26,7 @@ struct NavigationNoiseConfig {
   // 0: Table 1's DR sigmas throughout, as in the paper.
   bool estimate = true;
   // Fewer innovations than this say too little: the prior stays.
-  int min_registrations = 8;
+  int min_registrations = 3;
   // The least scale of the prior's x/y and yaw sigmas (5 mm and 1e-5 rad per step by default).
   double min_scale = 1e-3;
   // On each innovation's squared Mahalanobis distance: Huber's threshold in the first fit, and

@@ -134,7 +134,8 @@ nlohmann::json registrations_json(const PipelineResult& r) {
       j["guess_error_vs_reference"] = error_json(c.guess);
       if (c.in_graph()) {
         const auto sigmas = edge_error_sigmas(r.submaps, c.from, c.to, c.measured, c.anchor, c.information);
-        j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}, {"joint", sigmas->joint}};
+        j["error_sigmas"] = {{"horizontal", sigmas->horizontal}, {"yaw", sigmas->yaw}, {"joint", sigmas->joint},
+                             {"error_at_anchor_m", {sigmas->at_anchor_m.x(), sigmas->at_anchor_m.y()}}};
       }
     }
     list.push_back(std::move(j));

@@ -7,6 +7,7 @@
 #include <functional>
 #include <random>
 
+#include "core/register/coarse_to_fine.h"
 #include "tests/unit/synthetic_terrain.h"
 
 namespace bathyslam {
@@ -207,6 +208,29 @@ TEST(ObservedInformation, IsTakenInTheLevelFrameOfATiltedTarget) {
   for (int k : {0, 1, 5}) EXPECT_LT(level(k), 1e-3) << "x, y, yaw: axis " << k;
   for (int k : {2, 3, 4}) EXPECT_GT(level(k), 0.95) << "z, roll, pitch: axis " << k;
   EXPECT_GT(shares(observed(o))(1), 1e-3) << "in the tilted frame, y looks observed";
+}
+
+// The observable floor (bench_oracle_graph --observable) gives each pair, at the truth and without
+// registering, the information its overlap supports: none horizontally on a flat bottom, some
+// in every direction over mounds, and the truth itself as the measurement.
+TEST(ObserveAt, GivesTheInformationTheOverlapSupportsAtTheTruth) {
+  GicpConfig gicp;
+  for (const bool textured : {false, true}) {
+    const Overlap o = overlap_of(textured ? mounds() : Elevation(flat), 0.4, 0.02);
+    const auto target = prepare_gicp_cloud(*o.target, gicp), source = prepare_gicp_cloud(*o.source, gicp);
+    const PairRegistration seen = observe_at(*target, *source, o.truth, gicp, 1.0);
+    ASSERT_GT(seen.hessian.correspondences, 400u) << textured;
+    EXPECT_TRUE(seen.registration.source_to_target.isApprox(o.truth)) << "observed, not registered";
+    EXPECT_GT(seen.registration.quality.fitness, 0.9);
+    const Vector6 s = shares(observed_information(seen.hessian, 1.0, kBestSigmas, kFullShare, kZeroShare));
+    for (int k : {0, 1, 5}) {
+      if (textured) {
+        EXPECT_GT(s(k), 0.2) << "mounds, axis " << k;
+      } else {
+        EXPECT_LT(s(k), 1e-3) << "flat, axis " << k;
+      }
+    }
+  }
 }
 
 }  // namespace
