@@ -88,7 +88,7 @@ TEST(NavigationNoise, RecoversTheHeadingNoiseTheNavigationDriftedWith) {
 TEST(NavigationNoise, KeepsTableOneWithTooFewRegistrationsOrWhenOff) {
   const Lawnmower s = lawnmower(2, 10, 0.003, 1);
   const std::vector<DrInnovation> all = between_lines(s, 2);
-  const std::vector<DrInnovation> few(all.begin(), all.begin() + 3);
+  const std::vector<DrInnovation> few(all.begin(), all.begin() + 2);
   const NavigationNoiseEstimate e = estimate_navigation_noise(s.dr, few, GraphConfig{}, {});
   EXPECT_FALSE(e.estimated);
   EXPECT_EQ(e.graph.dr_sigma_rotation_rad, GraphConfig{}.dr_sigma_rotation_rad);
