@@ -87,8 +87,18 @@ Information6 quality_information(const PairRegistration& r, const QualityConfig&
     }
     Eigen::Matrix<double, 6, 1> best_sigmas;
     best_sigmas << config.best_sigma_translation_m, config.best_sigma_rotation_rad;
-    return observed_information(rotated(r.hessian, level_from_target), weight, best_sigmas, config.hessian_full_share,
-                                config.hessian_zero_share);
+    Information6 information = observed_information(rotated(r.hessian, level_from_target), weight, best_sigmas,
+                                                    config.hessian_full_share, config.hessian_zero_share);
+    // The relief cap below, kept positive semi-definite by scaling the depth row and column alike:
+    // the direct path's horizontal may yet be taken away (aliases, doubt, reach), and then its
+    // depth was measured where its guess put it.
+    if (r.path == RegistrationPath::kDirect && config.direct_depth_from_relief && r.uniqueness.probed &&
+        r.uniqueness.local_cost_m2 > 0 && information(2, 2) > 1.0 / r.uniqueness.local_cost_m2) {
+      const double scale = std::sqrt(1.0 / (r.uniqueness.local_cost_m2 * information(2, 2)));
+      information.row(2) *= scale;
+      information.col(2) *= scale;
+    }
+    return information;
   }
   Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
   if (r.path == RegistrationPath::kDirect) {

@@ -173,7 +173,9 @@ TEST(QualityWeights, IncreaseWithInlierRatioAndOverlapAndDecreaseWithMse) {
   better.registration.quality.overlap_mse_m2 = 0.1;
   worse.registration.quality.overlap_points = 800;
   better.registration.quality.overlap_points = 6000;
-  const Information6 a = quality_information(worse, {}), b = quality_information(better, {});
+  QualityConfig diagonal;  // the information's diagonal form (without the Hessian's shape)
+  diagonal.information_from_hessian = false;
+  const Information6 a = quality_information(worse, diagonal), b = quality_information(better, diagonal);
   for (int k = 0; k < 6; ++k) EXPECT_LT(a(k, k), b(k, k));
 }
 
@@ -192,6 +194,7 @@ TEST(QualityWeights, ADirectEdgeKeepsOnlyTheShareOfHorizontalInformationItIsGive
   PairRegistration featured = direct;
   featured.path = RegistrationPath::kFeatureAided;
   QualityConfig config;
+  config.information_from_hessian = false;  // the share applies to the diagonal form
   const Information6 f = quality_information(featured, config);
   for (double share : {0.0, 0.1}) {
     config.direct_horizontal_share = share;
@@ -207,6 +210,7 @@ TEST(QualityWeights, ADirectEdgesDepthIsCappedByTheReliefAroundItsAnswer) {
   PairRegistration direct = direct_registration(0.02, 12000);
   direct.uniqueness.probed = true;
   QualityConfig config;
+  config.information_from_hessian = false;  // the cap applies to the diagonal form
   direct.uniqueness.local_cost_m2 = 1e-4;
   const double flat = quality_information(direct, config)(2, 2);
   EXPECT_GT(flat, 100.0);
