@@ -83,6 +83,11 @@ struct QualityConfig {
   // misfit) a few metres away (Uniqueness::nearby_improvement): GICP stopped short of the
   // bottom of the basin. 4 is an RMS misfit twice the nearby one's. 0: not checked.
   double max_nearby_improvement = 4.0;
+  // A direct registration's turn: GICP turns weakly textured overlaps 2-4 degrees off with a
+  // good fit, 3-5 sigma of the Hessian's yaw (`lake` paper seed 2: 7 adjacent edges; crossing
+  // loops on `small`). 0: it keeps its position at the anchor, depth, roll and pitch, and the
+  // turn between lines comes from several edges' positions and the feature-aided edges.
+  bool direct_yaw = false;
 
   template <typename Field>
   void fields(Field&& field) {
@@ -95,6 +100,7 @@ struct QualityConfig {
     field("hessian_zero_share", hessian_zero_share, 0, 1);
     field("start_check_share", start_check_share, 0, 10);
     field("max_nearby_improvement", max_nearby_improvement, 0, 1e6);
+    field("direct_yaw", direct_yaw, 0, 1);
   }
 };
 

@@ -97,17 +97,11 @@ struct PipelineConfig {
   struct DirectLoops {
     bool enabled = true;
     double reach_sigmas = 2.0;
-    // A loop's overlap is where two lines cross, a patch a swath wide: GICP turns it 2-4 degrees
-    // off on weakly textured ground with a good fit (`small` `lake` seeds, within 3 sigma of the
-    // Hessian's yaw). Its position at the anchor is kept; the turn between the lines comes from
-    // several loops' positions and the adjacent lines' strips. 1: keep the Hessian's yaw.
-    bool keep_yaw = false;
 
     template <typename Field>
     void fields(Field&& field) {
       field("enabled", enabled, 0, 1);
       field("reach_sigmas", reach_sigmas, 0.1, 100);
-      field("keep_yaw", keep_yaw, 0, 1);
     }
   } direct_loops;
 

@@ -147,7 +147,9 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
       const Eigen::Matrix3d level_from_target =
           level_from_body(Eigen::Quaterniond(estimate[pair.target].rotation())).toRotationMatrix();
       c.information = quality_information(reg, config.quality, level_from_target);
-      if (direct_loop && !config.direct_loops.keep_yaw) c.information.row(5).setZero(), c.information.col(5).setZero();
+      if (reg.path == RegistrationPath::kDirect && !config.quality.direct_yaw) {
+        c.information.row(5).setZero(), c.information.col(5).setZero();
+      }
       const auto from = [&](const Eigen::Isometry3d& start) {
         return register_direct(target, source, start, config.registration.gicp, config.registration.crop_margin_m, false,
                                prepared());
