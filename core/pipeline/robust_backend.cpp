@@ -65,7 +65,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
 }
 
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                   const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target) {
+                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -80,6 +80,9 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
     }
     return;
   }
+  // A feature-aided answer as distinct as issue 14 asks stands (its features chose it, and the
+  // shoulders of its basin are no alternative); a direct one must have no competitor at all.
+  if (feature_aided && u.distinctness() >= min_distinctness) return;
   const std::vector<Eigen::Vector2d> competitors = u.competitor_offsets();
   if (competitors.empty()) return;
 
@@ -140,7 +143,8 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
   if (plan.alias_from_prior) {
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
-    resolve_alias(c, dr, dr_poses, config.robustness.pcm.plausibility, level_from_target);
+    resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
+                  level_from_target);
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

@@ -21,7 +21,8 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
 double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 
 // The uniqueness test with dead reckoning's word (robustness.alias_from_prior), for an accepted
-// registration with its information. Other offsets whose terrain fits nearly as well as the
+// registration with its information. A feature-aided answer at least `min_distinctness` distinct
+// stands, as in issue 14. Otherwise other offsets whose terrain fits nearly as well as the
 // answer's (the probe's competitors) do not refuse the answer when each of them fails the DR gate:
 // dead reckoning has chosen between them. When some do not, a feature-aided answer is refused
 // (as is one whose overlap was too small to probe) and a direct one keeps no horizontal
@@ -29,7 +30,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 // `level_from_target` turns the target submap's frame, where the offsets lie, into the edge's
 // residual frame.
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                   const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target);
+                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target);
 
 // Everything about a registration that rests on dead reckoning's noise model, decided anew:
 // the alias rule (plan.alias_from_prior) and the DR gate (plan.dr_gate), from the registration's

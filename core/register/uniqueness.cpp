@@ -171,12 +171,19 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
     }
   }
 
-  // Competitors are the local minima outside the exclusion radius that fit nearly as well: other
-  // alignments, not the shoulders of the answer's own basin. The best of them is the alternative.
+  // Competitors: every offset outside the exclusion radius that fits nearly as well, a basin's
+  // shoulders too (a direct answer on a weakly textured patch is not known to lie in the right
+  // basin). The best local minimum among all offsets is the alternative.
   u.reach = reach;
   u.step_m = config.step_m;
   u.competitors.assign(cost.size(), false);
   const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, kNoiseFloorM2);
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);
+      u.competitors[k] = std::hypot(i, j) * config.step_m >= config.exclusion_m && cost[k] < competing;
+    }
+  }
   u.alternative_cost_m2 = u.typical_cost_m2;
   auto at = [&](int i, int j) { return cost[static_cast<std::size_t>(j + reach) * side + (i + reach)]; };
   for (int j = -reach + 1; j < reach; ++j) {
@@ -187,9 +194,7 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
       for (int dj = -1; dj <= 1 && minimum; ++dj) {
         for (int di = -1; di <= 1 && minimum; ++di) minimum = (di == 0 && dj == 0) || here <= at(i + di, j + dj);
       }
-      if (!minimum) continue;
-      u.competitors[static_cast<std::size_t>(j + reach) * side + (i + reach)] = here < competing;
-      if (here < u.alternative_cost_m2) {
+      if (minimum && here < u.alternative_cost_m2) {
         u.alternative_cost_m2 = here;
         u.alternative_offset_m = Eigen::Vector2d(i * config.step_m, j * config.step_m);
       }

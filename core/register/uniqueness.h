@@ -26,10 +26,9 @@ struct UniquenessConfig {
   // direct path keeps its guess's horizontal error: p50 2-6 m on `lake`): the relief within this
   // radius is how wrong a depth measured at the wrong place can be.
   double local_radius_m = 5.0;
-  // A local minimum of the misfit outside the exclusion radius that is under this many times the
-  // answer's (floored as in `distinctness`) competes with it (Uniqueness::competitors): the same
-  // ratio as acceptance.min_distinctness, an RMS misfit under 5x the answer's, so that with dead
-  // reckoning saying nothing the alias rule refuses what the distinctness test refused.
+  // An offset outside the exclusion radius whose misfit is under this many times the answer's
+  // (floored as in `distinctness`) competes with it (Uniqueness::competitors): the same ratio as
+  // acceptance.min_distinctness, an RMS misfit under 5x the answer's.
   double competitor_ratio = 25.0;
   template <typename Field>
   void fields(Field&& field) {

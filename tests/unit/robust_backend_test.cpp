@@ -236,7 +236,7 @@ TEST(AliasFromPrior, ADirectAnswerAcrossSandWavesKeepsItsInformationWhenDeadReck
   const Survey2Lines s = two_lines(20, 7);
   Constraint c = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
   const Information6 before = c.information;
-  resolve_alias(c, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(c, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
   EXPECT_TRUE(c.accepted());
   EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
@@ -247,7 +247,7 @@ TEST(AliasFromPrior, ADirectAnswerAcrossSandWavesKeepsItsInformationWhenDeadReck
 TEST(AliasFromPrior, ADirectAnswerLosesItsHorizontalInformationWhereDeadReckoningAllowsAnAlias) {
   const Survey2Lines s = two_lines(20, 7);
   Constraint c = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
-  resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
   EXPECT_TRUE(c.accepted());
   EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
@@ -263,7 +263,7 @@ TEST(AliasFromPrior, ADirectAnswerLosesItsHorizontalInformationWhereDeadReckonin
     }
   }
   Constraint patch = direct_registration(s, 15, 24, probed_with(around));
-  resolve_alias(patch, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(patch, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
   for (int k : {0, 1, 5}) EXPECT_NEAR(patch.information(k, k), 0.0, 1e-9) << k;
   EXPECT_GT(patch.information(2, 2), 50.0) << "depth stays";
@@ -273,16 +273,16 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
   const Survey2Lines s = two_lines(20, 7);
   Constraint loose = registration(s, 15, 24), tight = registration(s, 15, 24);
   loose.uniqueness = tight.uniqueness = probed_with(sand_wave_aliases());
-  resolve_alias(loose, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(loose, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
-  resolve_alias(tight, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(tight, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
   EXPECT_EQ(loose.rejection.kind, RejectionKind::kNotUnique) << loose.rejection.text();
   EXPECT_TRUE(tight.accepted()) << tight.rejection.text();
   EXPECT_EQ(tight.alias, AliasResolution::kRuledOut);
 
   Constraint unprobed = registration(s, 15, 24);
-  resolve_alias(unprobed, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, PlausibilityConfig{},
+  resolve_alias(unprobed, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity());
   EXPECT_EQ(unprobed.rejection.kind, RejectionKind::kNotUnique) << "too little overlap to probe";
 }
