@@ -59,10 +59,7 @@ int observable_floor(const SubmapSet& set, const std::vector<Eigen::Isometry3d>&
   const DrNoiseModel any(dr, config.graph);
   std::vector<DrInnovation> innovations;
   for (const PoseGraphEdge& e : registrations) {
-    if (!carries_horizontal_information(e.information)) continue;
-    const LoopCandidate measured = loop_candidate(e, dr);
-    innovations.push_back({e.from, e.to, pose_difference(measured.measured, any.relative_pose(e.from, e.to)),
-                           measured.covariance});
+    if (carries_horizontal_information(e.information)) innovations.push_back(dr_innovation(e, any, dr));
   }
   const NavigationNoiseEstimate noise = estimate_navigation_noise(dr, innovations, config.graph, config.navigation_noise);
   std::vector<PoseGraphEdge> edges = odometry_edges(

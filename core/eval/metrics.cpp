@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/graph/pose_graph.h"
+
 namespace bathyslam {
 
 ErrorStats error_stats(std::vector<double> errors) {
@@ -145,11 +147,7 @@ std::optional<EdgeErrorSigmas> edge_error_sigmas(const SubmapSet& set, int from,
   const double e_yaw = std::atan2(turn(1, 0), turn(0, 0));
   const double horizontal2 = e_xy.dot(information.topLeftCorner<2, 2>() * e_xy);
   const Eigen::Vector3d r(-e_xy.x(), -e_xy.y(), e_yaw);
-  const int axes[3] = {0, 1, 5};
-  double joint2 = 0;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) joint2 += r(i) * information(axes[i], axes[j]) * r(j);
-  }
+  const double joint2 = r.dot(xy_yaw_block(information) * r);
   return EdgeErrorSigmas{std::sqrt(std::max(0.0, horizontal2)), std::abs(e_yaw) * std::sqrt(std::max(0.0, information(5, 5))),
                          std::sqrt(std::max(0.0, joint2)), e_xy};
 }

@@ -131,14 +131,8 @@ Vector6 pose_difference(const Eigen::Isometry3d& measured, const Eigen::Isometry
 }
 
 double mahalanobis2_xy_yaw(const Vector6& difference, const Covariance6& covariance) {
-  const std::array<int, 3> tested = {0, 1, 5};
-  Eigen::Vector3d d;
-  Eigen::Matrix3d c;
-  for (int i = 0; i < 3; ++i) {
-    d(i) = difference(tested[i]);
-    for (int j = 0; j < 3; ++j) c(i, j) = covariance(tested[i], tested[j]);
-  }
-  return d.dot(c.ldlt().solve(d));
+  const Eigen::Vector3d d(difference(0), difference(1), difference(5));
+  return d.dot(xy_yaw_block(covariance).ldlt().solve(d));
 }
 
 PlausibilityTest plausibility(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& dr_predicted,

@@ -1,24 +1,15 @@
 #include "core/graph/navigation_noise.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 
 #include <Eigen/Cholesky>
 
+#include "core/graph/loop_consistency.h"
+
 namespace bathyslam {
 namespace {
-
-constexpr std::array<int, 3> kTested = {0, 1, 5};  // x, y, yaw: what the DR gate tests
-
-Eigen::Matrix3d tested_block(const Covariance6& covariance) {
-  Eigen::Matrix3d block;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) block(i, j) = covariance(kTested[i], kTested[j]);
-  }
-  return block;
-}
 
 double huber(double m2, double threshold) {
   return m2 <= threshold ? m2 : 2.0 * std::sqrt(threshold * m2) - threshold;
@@ -75,6 +66,12 @@ Scales minimise(const std::vector<Term>& terms, const std::vector<char>& kept, d
 
 }  // namespace
 
+DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
+                           const std::vector<Eigen::Isometry3d>& dead_reckoning) {
+  const LoopCandidate measured = loop_candidate(edge, dead_reckoning);
+  return {edge.from, edge.to, pose_difference(measured.measured, dr.relative_pose(edge.from, edge.to)), measured.covariance};
+}
+
 NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                                   const std::vector<DrInnovation>& innovations, const GraphConfig& prior,
                                                   const NavigationNoiseConfig& config) {
@@ -94,10 +91,10 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
   terms.reserve(innovations.size());
   for (const DrInnovation& i : innovations) {
     Term t;
-    for (int k = 0; k < 3; ++k) t.d(k) = i.difference(kTested[k]);
-    t.a = tested_block(per_translation.covariance(i.from, i.to));
-    t.b = tested_block(per_yaw.covariance(i.from, i.to));
-    t.r = tested_block(i.measurement);
+    t.d = Eigen::Vector3d(i.difference(0), i.difference(1), i.difference(5));  // what the DR gate tests
+    t.a = xy_yaw_block(per_translation.covariance(i.from, i.to));
+    t.b = xy_yaw_block(per_yaw.covariance(i.from, i.to));
+    t.r = xy_yaw_block(i.measurement);
     terms.push_back(t);
   }
 

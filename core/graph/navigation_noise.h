@@ -52,6 +52,11 @@ struct DrInnovation {
   Covariance6 measurement = Covariance6::Zero();  // the registration's
 };
 
+// `edge` (a registration) against dead reckoning: the DR gate's difference and the edge's own
+// measurement covariance, as loop_candidate levels them.
+DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
+                           const std::vector<Eigen::Isometry3d>& dead_reckoning);
+
 struct NavigationNoiseEstimate {
   bool estimated = false;  // false: too few innovations, `graph` is the prior
   int innovations = 0;

@@ -35,6 +35,17 @@ Eigen::Quaternion<T> level_from_body(const Eigen::Quaternion<T>& body_to_map) {
   return Eigen::Quaternion<T>(Eigen::AngleAxis<T>(-yaw, Eigen::Matrix<T, 3, 1>::UnitZ())) * q;
 }
 
+// The x, y and yaw rows and columns of a 6x6 information or covariance in the edge's order: what
+// bends a survey sideways or turns it, and what the DR gate, PCM and the safety net test.
+inline Eigen::Matrix3d xy_yaw_block(const Information6& m) {
+  constexpr int axes[3] = {0, 1, 5};
+  Eigen::Matrix3d block;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) block(i, j) = m(axes[i], axes[j]);
+  }
+  return block;
+}
+
 // Diagonal information from standard deviations (metres, radians).
 Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
                                      const Eigen::Vector3d& rotation_rad);

@@ -95,19 +95,17 @@ int first_node_changed(const std::vector<Constraint>& constraints, std::vector<c
 // would say dead reckoning is right (on sand waves the heading noise came out 6 to 11 times too
 // small, even with its aliases as a wrapped likelihood) and the gates built on that would rule
 // out the true alignment.
+bool observes_drift(const Constraint& c, const Plan& plan) {
+  return c.type != ConstraintType::kOdometry && (!c.rejection.rejected() || refused_by_prior(c.rejection, plan)) &&
+         c.uniqueness.unique() && c.horizontal_doubt.empty() && carries_horizontal_information(c.registered_information);
+}
+
 std::vector<DrInnovation> dr_innovations(const std::vector<Constraint>& constraints, const DrNoiseModel& dr,
                                          const std::vector<Eigen::Isometry3d>& dr_poses, const Plan& plan) {
   std::vector<DrInnovation> innovations;
   for (const Constraint& c : constraints) {
-    if (c.type == ConstraintType::kOdometry) continue;
-    const RejectionKind kind = c.rejection.kind;
-    const bool prior_refused = kind == RejectionKind::kImplausible || (plan.alias_from_prior && kind == RejectionKind::kNotUnique);
-    if ((c.rejection.rejected() && !prior_refused) || !c.uniqueness.unique() || !c.horizontal_doubt.empty()) continue;
-    PoseGraphEdge edge{c.from, c.to, c.measured, c.registered_information, true, c.anchor};
-    if (!carries_horizontal_information(edge.information)) continue;
-    const LoopCandidate measured = loop_candidate(edge, dr_poses);
-    innovations.push_back({c.from, c.to, pose_difference(measured.measured, dr.relative_pose(c.from, c.to)),
-                           measured.covariance});
+    if (!observes_drift(c, plan)) continue;
+    innovations.push_back(dr_innovation({c.from, c.to, c.measured, c.registered_information, true, c.anchor}, dr, dr_poses));
   }
   return innovations;
 }
@@ -120,12 +118,14 @@ class NavigationNoiseTracker {
   explicit NavigationNoiseTracker(const PipelineConfig& config) : config_(config) {}
 
   void update(PipelineResult& r, DrNoiseModel& dr, PairDistances& pair_distances, const Plan& plan, bool last) {
-    const std::vector<DrInnovation> innovations = dr_innovations(r.constraints, dr, r.dr_poses, plan);
-    const auto count = static_cast<double>(innovations.size());
+    // Counted first: the innovations themselves are built only when an estimate is due.
+    const auto count = static_cast<double>(std::count_if(r.constraints.begin(), r.constraints.end(),
+                                                         [&](const Constraint& c) { return observes_drift(c, plan); }));
     if (count < config_.navigation_noise.min_registrations || (!last && count < 1.25 * estimated_from_)) return;
     if (count == estimated_from_) return;
     estimated_from_ = count;
-    r.navigation_noise = estimate_navigation_noise(r.dr_poses, innovations, config_.graph, config_.navigation_noise);
+    r.navigation_noise = estimate_navigation_noise(r.dr_poses, dr_innovations(r.constraints, dr, r.dr_poses, plan),
+                                                   config_.graph, config_.navigation_noise);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(r.dr_poses, graph);
     pair_distances = PairDistances{};  // PCM's tests rest on the model

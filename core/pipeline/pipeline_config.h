@@ -115,10 +115,10 @@ struct PipelineConfig {
     // After the solve: lines tested against DR's noise, edges that pull beyond max_pull_sigma
     // dropped one at a time (at most max_drops), and dead reckoning published if that fails.
     bool safety_net = true;
-    // On a periodic seabed a registration's terrain also fits a wavelength away (the uniqueness
-    // probe's alternative). When dead reckoning rules that alternative out (it fails the DR gate)
-    // the answer stands; when it does not, a feature-aided answer is refused and a direct one
-    // loses its information along the alternative's direction. 0: refused or kept regardless.
+    // On a periodic or weakly textured seabed a registration's terrain also fits elsewhere (the
+    // uniqueness probe's competitors). When dead reckoning rules every competitor out (each fails
+    // the DR gate) the answer stands; when it does not, a feature-aided answer is refused and a
+    // direct one keeps depth, roll and pitch only (resolve_alias). 0: issue 14's uniqueness test.
     bool alias_from_prior = true;
     GraphCheckConfig line_check;
     double max_pull_sigma = 6.0;

@@ -61,12 +61,7 @@ double answers_apart2(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, co
   const Eigen::Vector3d moved = a * anchor - b * anchor;
   const Eigen::Matrix3d turn = a.linear() * b.linear().transpose();
   const Eigen::Vector3d d(moved.x(), moved.y(), std::atan2(turn(1, 0), turn(0, 0)));
-  const int axes[3] = {0, 1, 5};
-  double m2 = 0;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) m2 += d(i) * information(axes[i], axes[j]) * d(j);
-  }
-  return m2;
+  return d.dot(xy_yaw_block(information) * d);
 }
 
 // Why a registration's horizontal answer is not the overlap's, or nullopt when nothing says so:

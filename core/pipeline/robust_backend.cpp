@@ -18,12 +18,8 @@ PoseGraphEdge edge_of(const Constraint& c) {
 // How hard an edge pulls against a solution, in sigmas of its own information on x, y and yaw.
 double horizontal_pull_sigma(const PoseGraphEdge& edge, const std::vector<Eigen::Isometry3d>& poses) {
   const Eigen::Matrix<double, 6, 1> error = edge_error(edge, poses[edge.from], poses[edge.to]);
-  const int axes[3] = {0, 1, 5};
-  double m2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) m2 += error(axes[a]) * edge.information(axes[a], axes[b]) * error(axes[b]);
-  }
-  return std::sqrt(std::max(0.0, m2));
+  const Eigen::Vector3d e(error(0), error(1), error(5));
+  return std::sqrt(std::max(0.0, e.dot(xy_yaw_block(edge.information) * e)));
 }
 
 // No registration enters the published map: each says so, so that the report's accepted edges
@@ -50,12 +46,10 @@ Eigen::Vector2d spread_of(const Eigen::Matrix2d& scatter) {
 void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                  const PlausibilityConfig& config) {
   if (!c.accepted()) return;
-  const LoopCandidate measured = loop_candidate(edge_of(c), dr_poses);
-  const PlausibilityTest test = plausibility(measured.measured, dr.relative_pose(c.from, c.to),
-                                             dr.covariance(c.from, c.to) + measured.covariance, config.chi2_threshold);
-  c.dr_mahalanobis2 = test.mahalanobis2;
-  if (test.plausible) return;
-  c.rejection = {RejectionKind::kImplausible, format("Mahalanobis2 %.1f > %.1f over %.0f submaps", test.mahalanobis2,
+  const DrInnovation innovation = dr_innovation(edge_of(c), dr, dr_poses);
+  c.dr_mahalanobis2 = mahalanobis2_xy_yaw(innovation.difference, dr.covariance(c.from, c.to) + innovation.measurement);
+  if (c.dr_mahalanobis2 <= config.chi2_threshold) return;
+  c.rejection = {RejectionKind::kImplausible, format("Mahalanobis2 %.1f > %.1f over %.0f submaps", c.dr_mahalanobis2,
                                                       config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)))};
 }
 
@@ -88,14 +82,9 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
 
   // The DR gate's statistic for the answer moved by each competitor's offset: the difference
   // from dead reckoning moves by the offset (in `from`'s level frame), its covariance stays.
-  const LoopCandidate measured = loop_candidate(edge_of(c), dr_poses);
-  const Vector6 difference = pose_difference(measured.measured, dr.relative_pose(c.from, c.to));
-  const Covariance6 covariance = dr.covariance(c.from, c.to) + measured.covariance;
-  Eigen::Matrix3d tested;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) tested(i, j) = covariance(i < 2 ? i : 5, j < 2 ? j : 5);
-  }
-  const Eigen::LDLT<Eigen::Matrix3d> gate(tested);
+  const DrInnovation innovation = dr_innovation(edge_of(c), dr, dr_poses);
+  const Vector6& difference = innovation.difference;
+  const Eigen::LDLT<Eigen::Matrix3d> gate(xy_yaw_block(dr.covariance(c.from, c.to) + innovation.measurement));
   Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets, for the report
   int plausible = 0;
   double nearest = std::numeric_limits<double>::infinity();
@@ -129,13 +118,17 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   c.alias = AliasResolution::kInformationRemoved;
 }
 
+bool refused_by_prior(const Rejection& rejection, const Plan& plan) {
+  return rejection.kind == RejectionKind::kImplausible ||
+         (plan.alias_from_prior && rejection.kind == RejectionKind::kNotUnique);
+}
+
 void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                       const PipelineConfig& config, const Plan& plan) {
   if (c.type == ConstraintType::kOdometry) return;
   // With the alias rule on, acceptance leaves the uniqueness test to resolve_alias: every
   // kNotUnique is the prior's, as every kImplausible is.
-  const RejectionKind kind = c.rejection.kind;
-  if (kind == RejectionKind::kImplausible || (plan.alias_from_prior && kind == RejectionKind::kNotUnique)) c.rejection = {};
+  if (refused_by_prior(c.rejection, plan)) c.rejection = {};
   if (!c.accepted()) return;
   if (plan.quality_aware) c.information = c.registered_information;
   c.alias = AliasResolution::kNone;

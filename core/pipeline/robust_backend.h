@@ -32,6 +32,10 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target);
 
+// Whether `rejection` rests on dead reckoning's noise model (the DR gate, or with
+// plan.alias_from_prior the uniqueness test), so that a better model may take it back.
+bool refused_by_prior(const Rejection& rejection, const Plan& plan);
+
 // Everything about a registration that rests on dead reckoning's noise model, decided anew:
 // the alias rule (plan.alias_from_prior) and the DR gate (plan.dr_gate), from the registration's
 // own verdict and information. A registration these refused before is tested again, so a

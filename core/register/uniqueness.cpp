@@ -8,8 +8,6 @@
 namespace bathyslam {
 namespace {
 
-constexpr double kNoiseFloorM2 = 4e-4;  // distinctness's default floor: (2 cm)²
-
 // Where a moved source cell falls on the target grid: the target cell below-left of it and the
 // bilinear weights within. An offset of whole target cells moves the cell and keeps the weights,
 // so the probe's offsets (a step of 1 m over 0.5 m cells) reuse one set of samples.
@@ -177,7 +175,7 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
   u.reach = reach;
   u.step_m = config.step_m;
   u.competitors.assign(cost.size(), false);
-  const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, kNoiseFloorM2);
+  const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, kMisfitNoiseFloorM2);
   for (int j = -reach; j <= reach; ++j) {
     for (int i = -reach; i <= reach; ++i) {
       const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);

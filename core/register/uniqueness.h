@@ -41,6 +41,10 @@ struct UniquenessConfig {
   }
 };
 
+// The misfit a perfect alignment still leaves, (2 cm)²: ratios of misfits are taken against at
+// least this, so that sounding noise alone does not make an answer look unique.
+inline constexpr double kMisfitNoiseFloorM2 = 4e-4;
+
 struct Uniqueness {
   bool probed = false;  // false: too little overlap to compare
   double cost_at_answer_m2 = 0;  // mean squared elevation difference, mean removed
@@ -57,10 +61,10 @@ struct Uniqueness {
   // misfits, the answer's floored at `noise_floor_m2`. About 1 when another offset fits as well
   // (a periodic or flat seabed); in the hundreds on textured ground, where only the answer
   // leaves nothing but sounding noise.
-  double distinctness(double noise_floor_m2 = 4e-4) const;
+  double distinctness(double noise_floor_m2 = kMisfitNoiseFloorM2) const;
   // How many times better the best nearby offset fits than the answer (both floored at
   // `noise_floor_m2`): about 1 at the bottom of the basin.
-  double nearby_improvement(double noise_floor_m2 = 4e-4) const;
+  double nearby_improvement(double noise_floor_m2 = kMisfitNoiseFloorM2) const;
   // Every offset that competes with the answer (UniquenessConfig::competitor_ratio), as a mask
   // over the probe's square of (2·reach + 1)² offsets `step_m` apart, row by row from
   // (−reach, −reach): a bit each, so that a flat bottom, where every offset competes, costs

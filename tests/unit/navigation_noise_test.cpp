@@ -54,9 +54,7 @@ DrInnovation innovation(const Lawnmower& s, int from, int to, double ex = 0, dou
   edge.to = to;
   edge.measured = pose(ex, ey, 0) * Eigen::Translation3d(0, 0, 10.0) * (s.truth[from].inverse() * s.truth[to]);
   edge.information = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.01});
-  const LoopCandidate measured = loop_candidate(edge, s.dr);
-  const DrNoiseModel any(s.dr, GraphConfig{});
-  return {from, to, pose_difference(measured.measured, any.relative_pose(from, to)), measured.covariance};
+  return dr_innovation(edge, DrNoiseModel(s.dr, GraphConfig{}), s.dr);
 }
 
 std::vector<DrInnovation> between_lines(const Lawnmower& s, int lines) {
