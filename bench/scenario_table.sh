@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The README's configuration tables: simulates a scenario for several seeds, processes each
-# bundle with each configuration, and prints one markdown row per (seed, configuration).
+# The configuration tables of docs/results/ (slam-results.md, robustness.md): simulates a
+# scenario for several seeds, processes each bundle with each configuration, and prints one
+# markdown row per (seed, configuration).
 #   bench/scenario_table.sh [--scenario lake] [--drift paper] [--seeds "1 2 3 4 5"]
 #                           [--configs "odometry gicp"] [--work DIR]
 #                           [--set "key=value ..."] [--tag NAME]

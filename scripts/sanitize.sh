@@ -12,7 +12,7 @@
 # pipeline_test 11 in 495 s; build them with --target, run them with the options below). They
 # stay out of CI's run for its time limit: compiling them with ASan costs minutes that the 45
 # asked for do not have room for. The build compiles at -O1 (CMakeLists.txt): these programs
-# took 679 s from scratch at -O1 and 1464 s at -O3 (README, Reliability).
+# took 679 s from scratch at -O1 and 1464 s at -O3 (docs/service.md, Reliability).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD

@@ -3,7 +3,7 @@
 for LOAD_SECONDS (default 60) while two `mchs` jobs run on the server's two workers. No call may
 fail, both jobs must succeed, and the server's resident memory must stay under LOAD_MAX_RSS_MB
 (default 3000), during the load and after the jobs. Prints throughput and latency
-percentiles (the README's figures come from here). The same environment as
+percentiles (docs/service.md's figures come from here). The same environment as
 service_api_test.py (set by ctest)."""
 import hashlib
 import random
