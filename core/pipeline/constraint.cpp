@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <Eigen/SVD>
+
 namespace bathyslam {
 
 std::string to_string(ConstraintType t) {
@@ -36,6 +38,44 @@ bool carries_horizontal_information(const Information6& information) {
 Information6 without_horizontal(Information6 information) {
   for (int k : {0, 1, 5}) information.row(k).setZero(), information.col(k).setZero();
   return information;
+}
+
+Information6 widened_by_doubt(Information6 information, const OtherAnswers& others, Eigen::Matrix2d& spread) {
+  spread.setZero();
+  if (others.lost || others.landings.empty()) return without_horizontal(information);
+  for (const Eigen::Vector2d& l : others.landings) spread += l * l.transpose() / static_cast<double>(others.landings.size());
+  if (others.shifts.size() == 2) {
+    // Landings ≈ A · shifts: A's singular value along a direction is the share of a start's
+    // offset that GICP keeps there, 0 where it comes all the way back, 1 where it stays put.
+    // Kept more than half of it, the direction is the start's, not the terrain's.
+    constexpr double kKeptShare = 0.5;
+    Eigen::Matrix2d shifts, landings;
+    shifts << others.shifts[0], others.shifts[1];
+    landings << others.landings[0], others.landings[1];
+    const Eigen::JacobiSVD<Eigen::Matrix2d> svd(landings * shifts.inverse(), Eigen::ComputeFullV);
+    for (int k = 0; k < 2; ++k) {
+      if (svd.singularValues()(k) > kKeptShare) information = without_direction(information, svd.matrixV().col(k));
+    }
+  }
+  return with_horizontal_spread(information, spread);
+}
+
+Information6 with_horizontal_spread(Information6 information, const Eigen::Matrix2d& spread) {
+  // (C_own + S)⁻¹ written with the own block's information A, which may be singular (a direction
+  // it does not observe): S⁻¹ − S⁻¹ (A + S⁻¹)⁻¹ S⁻¹.
+  const Eigen::Matrix2d own = information.topLeftCorner<2, 2>();
+  const Eigen::Matrix2d s_inv = (spread + 1e-6 * Eigen::Matrix2d::Identity()).inverse();
+  const Eigen::Matrix2d combined = s_inv - s_inv * (own + s_inv).inverse() * s_inv;
+  information = without_horizontal(information);
+  information.topLeftCorner<2, 2>() = 0.5 * (combined + combined.transpose());
+  return information;
+}
+
+Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction) {
+  Eigen::Matrix<double, 6, 6> keep = Eigen::Matrix<double, 6, 6>::Identity();
+  const Eigen::Vector2d u = direction.normalized();
+  keep.topLeftCorner<2, 2>() -= u * u.transpose();
+  return keep.transpose() * information * keep;
 }
 
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph) {

@@ -51,6 +51,9 @@ struct Constraint {
   // Why the registration's horizontal answer is not the overlap's (register_pairs.cpp,
   // horizontal_doubt), its horizontal information removed; empty when nothing says so.
   std::string horizontal_doubt;
+  // The doubt's scatter of other answers added to the answer's covariance (level frame, m²;
+  // widened_by_doubt): zero when nothing widened it.
+  Eigen::Matrix2d horizontal_spread = Eigen::Matrix2d::Zero();
   AliasResolution alias = AliasResolution::kNone;
   double alias_mahalanobis2 = -1;  // the nearest competitor's DR statistic; negative: not tested
   // The DR-plausible competitors' RMS distance from the answer along and across their main line.
@@ -69,6 +72,27 @@ bool carries_horizontal_information(const Information6& information);
 
 // `information` with x, y and yaw taken out (rows and columns): depth, roll and pitch only.
 Information6 without_horizontal(Information6 information);
+
+// Where else a registration's overlap put its answer, as horizontal offsets from it in the
+// level frame (m): each start check's shift and where GICP landed from it, or the nearby better
+// fit alone (register_pairs.cpp, horizontal_doubt).
+struct OtherAnswers {
+  std::vector<Eigen::Vector2d> shifts, landings;
+  bool lost = false;  // a start did not converge
+};
+
+// A doubted answer's information, widened rather than removed (quality.doubt_widens): nothing
+// along a direction GICP does not come back along from the other starts (a sand-wave crest, a
+// flat's every direction), and the landings' scatter, given in `spread`, added to the covariance
+// of the rest. Yaw out. A lost start leaves depth, roll and pitch only.
+Information6 widened_by_doubt(Information6 information, const OtherAnswers& others, Eigen::Matrix2d& spread);
+
+// `information` with the covariance `spread` (level frame, m²) added to what its own x, y block
+// claims, and yaw out: an answer that may lie anywhere within `spread` of where it was found.
+Information6 with_horizontal_spread(Information6 information, const Eigen::Matrix2d& spread);
+
+// `information` with nothing along the horizontal `direction` (level frame).
+Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction);
 
 // Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information
 // (Table 1's by default).

@@ -89,15 +89,20 @@ int first_node_changed(const std::vector<Constraint>& constraints, std::vector<c
 }
 
 // The registrations so far as observations of dead reckoning's drift: every one the
-// registration tests accepted whose answer is the terrain's alone (unique within the probe's
-// reach, reached from other starts too), whatever the prior's gates said of it (they rest on the
-// noise being estimated). An ambiguous answer stays where dead reckoning put it: counted, it
+// registration tests accepted whose horizontal answer is the terrain's (unique within the
+// probe's reach and reached from other starts too, or doubted and widened by where the other
+// starts landed: widened_by_doubt), whatever the prior's gates said of it (they rest on the noise
+// being estimated). An ambiguous answer with its own tight information stays out: counted, it
 // would say dead reckoning is right (on sand waves the heading noise came out 6 to 11 times too
 // small, even with its aliases as a wrapped likelihood) and the gates built on that would rule
-// out the true alignment.
+// out the true alignment. Nor does an alias's scatter count as a registration's noise: it is a
+// bound on where the answer may be, and counted as noise it made every sand-wave survey's
+// navigation look perfect.
 bool observes_drift(const Constraint& c, const Plan& plan) {
-  return c.type != ConstraintType::kOdometry && (!c.rejection.rejected() || refused_by_prior(c.rejection, plan)) &&
-         c.uniqueness.unique() && c.horizontal_doubt.empty() && carries_horizontal_information(c.registered_information);
+  if (c.type == ConstraintType::kOdometry || (c.rejection.rejected() && !refused_by_prior(c.rejection, plan))) return false;
+  if (!carries_horizontal_information(c.registered_information)) return false;
+  const bool widened = c.horizontal_spread.trace() > 0;
+  return widened || (c.uniqueness.unique() && c.horizontal_doubt.empty());
 }
 
 std::vector<DrInnovation> dr_innovations(const std::vector<Constraint>& constraints, const DrNoiseModel& dr,

@@ -67,18 +67,25 @@ double answers_apart2(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, co
 // Why a registration's horizontal answer is not the overlap's, or nullopt when nothing says so:
 // the terrain fits much better a few metres away (quality.max_nearby_improvement), or, on the
 // direct path, GICP does not come back to the answer from two starts either side of the guess
-// across both horizontal axes (quality.start_check_share).
+// across both horizontal axes (quality.start_check_share). `others` gets where else the answer
+// was found, in the level frame `level_from_target` gives.
 std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const Information6& information,
                                             const std::function<PairRegistration(const Eigen::Isometry3d&)>& from,
-                                            const PipelineConfig& config) {
+                                            const PipelineConfig& config, const Eigen::Matrix3d& level_from_target,
+                                            OtherAnswers& others) {
+  const auto level = [&](const Eigen::Vector2d& v) {
+    return (level_from_target * Eigen::Vector3d(v.x(), v.y(), 0)).head<2>().eval();
+  };
   const QualityConfig& quality = config.quality;
   const double improvement = reg.uniqueness.nearby_improvement();
   if (quality.max_nearby_improvement > 0 && improvement > quality.max_nearby_improvement) {
+    others.landings.push_back(level(reg.uniqueness.nearby_offset_m));
     return format("the terrain fits %.1fx better %.1f m away", improvement, reg.uniqueness.nearby_offset_m.norm());
   }
   const double spread = quality.start_check_share * config.registration.gicp.max_correspondence_m;
   if (reg.path != RegistrationPath::kDirect || spread <= 0) return std::nullopt;
   const double chi2 = config.robustness.pcm.plausibility.chi2_threshold;
+  std::optional<std::string> doubt;
   for (const Eigen::Vector2d side : {Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)}) {
     const Eigen::Vector2d shift = spread * side.normalized();
     Eigen::Isometry3d start = reg.coarse;
@@ -86,13 +93,19 @@ std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const I
     const PairRegistration again = from(start);
     const double m2 = answers_apart2(again.registration.source_to_target, reg.registration.source_to_target, reg.anchor,
                                      information);
-    if (!again.registration.quality.converged || m2 > chi2) {
-      return format("from %.1f m aside GICP lands %.2f m away (Mahalanobis2 %.1f > %.1f)", spread,
-                    (again.registration.source_to_target * reg.anchor - reg.registration.source_to_target * reg.anchor).norm(),
-                    m2, chi2);
+    const Eigen::Vector3d landed =
+        again.registration.source_to_target * reg.anchor - reg.registration.source_to_target * reg.anchor;
+    others.shifts.push_back(level(shift));
+    others.landings.push_back(level(landed.head<2>()));
+    if (!again.registration.quality.converged) {
+      others.lost = true;
+      doubt = format("from %.1f m aside GICP does not converge", spread);
+    } else if (m2 > chi2) {
+      if (!doubt) doubt = format("from %.1f m aside GICP lands %.2f m away (Mahalanobis2 %.1f > %.1f)", spread,
+                                 landed.norm(), m2, chi2);
     }
   }
-  return std::nullopt;
+  return doubt;
 }
 
 Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Isometry3d>& estimate,
@@ -150,14 +163,17 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
                                prepared());
       };
       std::optional<std::string> doubt;
+      OtherAnswers others;
       if (!loop_reach.empty()) {
         doubt = loop_reach;
       } else if (carries_horizontal_information(c.information)) {
-        doubt = horizontal_doubt(reg, c.information, from, config);
+        doubt = horizontal_doubt(reg, c.information, from, config, level_from_target, others);
       }
       if (doubt) {
-        c.information = without_horizontal(c.information);
         c.horizontal_doubt = *doubt;
+        c.information = config.quality.doubt_widens && !others.landings.empty()
+                            ? widened_by_doubt(c.information, others, c.horizontal_spread)
+                            : without_horizontal(c.information);
       }
     }
   } else {

@@ -59,7 +59,8 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
 }
 
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target) {
+                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
+                   bool widens) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -109,12 +110,16 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
                           static_cast<double>(competitors.size()), static_cast<double>(plausible), nearest)};
     return;
   }
-  // A direct answer keeps no horizontal information where an alias is plausible. Keeping the
-  // position across a line of competitors (a channel, sand-wave crests) was tried: on `small`
-  // sand waves and on `lake` such edges sat 7-17 sigma off across the line, the truth not
-  // among the probe's competitors.
+  // A direct answer where an alias is plausible: with quality.doubt_widens, anywhere among the
+  // plausible competitors (their scatter added to its covariance: along a line of them, such as
+  // sand-wave crests, it keeps the position across the line only as well as the line is narrow);
+  // without, no horizontal information at all. Keeping the position across the line with the
+  // answer's own information was tried: on `small` sand waves and on `lake` such edges sat
+  // 7-17 sigma off across the line, the truth not among the probe's competitors.
   c.alias_spread_m = spread_of(plausible_spread / plausible);
-  c.information = without_horizontal(c.information);
+  c.information = widens && carries_horizontal_information(c.information)
+                      ? with_horizontal_spread(c.information, plausible_spread / plausible)
+                      : without_horizontal(c.information);
   c.alias = AliasResolution::kInformationRemoved;
 }
 
@@ -137,7 +142,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
     resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
-                  level_from_target);
+                  level_from_target, config.quality.doubt_widens);
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

@@ -9,7 +9,7 @@ trap 'rm -rf "$work"' EXIT
 rows="$(dirname "$0")/../../bench/robustness_rows.py"
 
 # The paper's method: every defence of issue 14 off, and every addition of issue 31.
-literal=(--set robustness.dr_gate=0 --set robustness.consistency=0 --set robustness.safety_net=0 --set acceptance.min_distinctness=0
+literal=(--set quality.doubt_widens=0 --set robustness.dr_gate=0 --set robustness.consistency=0 --set robustness.safety_net=0 --set acceptance.min_distinctness=0
          --set acceptance.max_competitor_ratio=0 --set quality.direct_depth_from_relief=0 --set quality.best_sigma_rotation_rad.yaw=0.004
          --set quality.information_from_hessian=0 --set quality.start_check_share=0 --set quality.max_nearby_improvement=0
          --set direct_loops.enabled=0 --set navigation_noise.estimate=0 --set robustness.alias_from_prior=0

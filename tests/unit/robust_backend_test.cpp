@@ -287,6 +287,76 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
   EXPECT_EQ(unprobed.rejection.kind, RejectionKind::kNotUnique) << "too little overlap to probe";
 }
 
+// With doubt_widens, the same answer along a line of plausible aliases keeps its position across
+// the line (the crests' period is what the line is narrow by) and nothing along it.
+TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) {
+  const Survey2Lines s = two_lines(20, 7);
+  // Crests along x this time: the aliases lie along x, 1 m either side of the answer's line.
+  std::vector<Eigen::Vector2d> along_crest;
+  for (int x = -20; x <= 20; ++x) {
+    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
+  }
+  Constraint c = direct_registration(s, 15, 24, probed_with(along_crest));
+  resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity(), true);
+  EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
+  EXPECT_NEAR(c.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
+  EXPECT_LT(c.information(0, 0), 0.02) << "along it: no better than the aliases' spread, 12 m";
+  EXPECT_NEAR(c.information(5, 5), 0.0, 1e-12) << "no yaw";
+  EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
+}
+
+// GICP, started 1.06 m aside on both diagonals, comes back across the crests (y) but stays where
+// it started along them (x): only the position across stays, widened by how far the landings
+// fell from the answer.
+TEST(DoubtWidens, KeepsOnlyTheDirectionGicpComesBackAlong) {
+  const Information6 own = information_from_sigmas({0.05, 0.05, 0.05}, {0.002, 0.002, 0.004});
+  OtherAnswers others;
+  const double d = 1.5 / std::sqrt(2.0);
+  others.shifts = {{d, d}, {-d, d}};
+  others.landings = {{d, 0.3}, {-d, -0.3}};
+  Eigen::Matrix2d spread;
+  const Information6 widened = widened_by_doubt(own, others, spread);
+  EXPECT_NEAR(widened(0, 0), 0.0, 1e-9) << "along the crests: where the start was";
+  EXPECT_NEAR(widened(1, 1), 1.0 / (0.05 * 0.05 + 0.09), 1e-3) << "across: own variance plus the landings' 0.3 m";
+  EXPECT_NEAR(widened(5, 5), 0.0, 1e-12);
+  EXPECT_NEAR(widened(2, 2), own(2, 2), 1e-9) << "depth as registered";
+  EXPECT_NEAR(spread(0, 0), d * d, 1e-9);
+
+  // Coming back in neither direction (a flat): nothing horizontal; a lost start: the same.
+  others.landings = {{d, d}, {-d, d}};
+  const Information6 flat = widened_by_doubt(own, others, spread);
+  for (int k : {0, 1, 5}) EXPECT_NEAR(flat(k, k), 0.0, 1e-9) << k;
+  others.landings = {{0.1, 0.1}, {-0.1, 0.1}};
+  others.lost = true;
+  const Information6 lost = widened_by_doubt(own, others, spread);
+  for (int k : {0, 1, 5}) EXPECT_NEAR(lost(k, k), 0.0, 1e-9) << k;
+}
+
+TEST(DoubtWidens, AddsTheSpreadToTheAnswersOwnCovarianceEvenWhereItObservesOneDirectionOnly) {
+  Information6 own = information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004});
+  Eigen::Matrix2d spread = Eigen::Vector2d(4.0, 0.25).asDiagonal();
+  Information6 widened = with_horizontal_spread(own, spread);
+  EXPECT_NEAR(widened(0, 0), 1.0 / (0.01 + 4.0), 1e-3);
+  EXPECT_NEAR(widened(1, 1), 1.0 / (0.01 + 0.25), 1e-3);
+  EXPECT_NEAR(widened(0, 1), 0.0, 1e-12);
+
+  // Observed across only (y): along stays unobserved whatever the spread.
+  own = without_direction(own, Eigen::Vector2d(1, 0));
+  EXPECT_NEAR(own(0, 0), 0.0, 1e-12);
+  EXPECT_NEAR(own(1, 1), 100.0, 1e-9);
+  widened = with_horizontal_spread(own, spread);
+  EXPECT_NEAR(widened(0, 0), 0.0, 1e-6);
+  EXPECT_NEAR(widened(1, 1), 1.0 / (0.01 + 0.25), 1e-3);
+
+  // A direction at 45 degrees taken out of an isotropic block leaves the other diagonal.
+  const Information6 diagonal = without_direction(information_from_sigmas({0.1, 0.1, 0.05}, {0.002, 0.002, 0.004}),
+                                                  Eigen::Vector2d(1, 1));
+  const Eigen::Vector2d across(1, -1);
+  EXPECT_NEAR((diagonal.topLeftCorner<2, 2>() * Eigen::Vector2d(1, 1)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(across.dot(diagonal.topLeftCorner<2, 2>() * across) / across.squaredNorm(), 100.0, 1e-9);
+}
+
 // A registration refused under Table 1's noise is judged again under the survey's: the prior's
 // verdicts are not final.
 TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
