@@ -25,7 +25,7 @@ std::string state_name(v1::JobState state) {
 struct SubmitOptions {
   Remote remote;
   std::int64_t survey = 0;
-  std::string config = "gicp";
+  std::string config = "mchs";
   std::vector<std::string> sets;
 };
 

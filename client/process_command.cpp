@@ -26,7 +26,7 @@ namespace {
 
 struct ProcessOptions {
   SurveyOptions survey;
-  std::string config = "gicp";
+  std::string config = "mchs";
   std::vector<std::string> sets;
   int threads = 0;
   FuseConfig fuse;

@@ -75,7 +75,9 @@ void constraint_stats(const std::map<std::string, ConstraintCounts>& groups,
 PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
   PipelineConfig config;
   try {
-    config = preset_config(parse_configuration(request.configuration()));
+    // None named: the full method, as everywhere (the CLI, the library).
+    config = preset_config(request.configuration().empty() ? Configuration::kMchs
+                                                           : parse_configuration(request.configuration()));
   } catch (const std::invalid_argument& error) {
     throw invalid("configuration", error.what());
   }

@@ -381,6 +381,13 @@ class ServiceApiTest(unittest.TestCase):
         self.assertEqual(len(pages.surveys), 1)
         self.assertNotEqual(pages.next_page_token, "")
 
+    def test_a_job_that_names_no_configuration_runs_mchs(self):
+        survey_id = self.ready_survey("default")
+        job = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id), timeout=30)
+        self.assertEqual(job.configuration, "mchs")
+        self.assertEqual(self.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id)).configuration, "mchs")
+        self.assertEqual(self.watch(job.id)[-1].state, job_pb2.SUCCEEDED)
+
     def test_cancelled_job_stops_within_two_seconds(self):
         survey_id = self.ready_survey("cancel")
         # A slow registration (many iterations on one thread), so the job is surely mid-stage.
