@@ -24,7 +24,7 @@ struct AcceptanceConfig {  // Table 1 (b)
   // Uniqueness (feature-aided path, register/uniqueness.h): refused unless every other
   // horizontal offset of the terrain within reach fits at least this many times worse (in mean
   // squared misfit) than the answer, i.e. with an RMS misfit 5x the answer's: correct answers
-  // and aliases a wavelength off fall far apart on either side of it (README, "Robustness").
+  // and aliases a wavelength off fall far apart on either side of it (docs/results/robustness.md).
   // 0 turns the test off.
   double min_distinctness = 25.0;
 
@@ -50,12 +50,12 @@ struct QualityConfig {
   Eigen::Vector3d best_sigma_translation_m{0.1, 0.1, 0.05};
   // Yaw: a registration that places an overlap some 20 m across to 0.1 m knows its turn to about
   // 0.1 m over a 10 m lever, 0.01 rad; tighter made correct edges sit sigmas off in yaw
-  // (README, "Robustness").
+  // (docs/results/robustness.md).
   Eigen::Vector3d best_sigma_rotation_rad{0.002, 0.002, 0.01};
   // Share of that information in x, y and yaw that a direct-path edge keeps. The switch sends
   // a pair down the direct path when its overlap has too few features to match, and there
   // GICP's horizontal answer is its starting guess: such edges carry the guess's error (metres
-  // to tens of metres, README "Results") with a good residual. They constrain depth,
+  // to tens of metres, docs/results/slam-results.md) with a good residual. They constrain depth,
   // roll and pitch; the horizontal comes from dead reckoning and feature-aided edges.
   double direct_horizontal_share = 0.0;
   // Nor does the direct path know where along the bottom its depth was measured: on sloping,
@@ -90,11 +90,11 @@ struct QualityConfig {
   bool direct_yaw = false;
   // Where doubt or a plausible alias would take a direct answer's position away, widen it
   // instead (widened_by_doubt, resolve_alias): nothing along a direction GICP does not come
-  // back along, and the scatter of the other starts' landings, the nearby better fit or the
-  // DR-plausible competitors added to the covariance of the rest. Off: on `small` sand waves it
-  // lowers the consistency RMSE 3-5x under paper drift, but under heading-walk and compass-step
-  // drift its loops sit 2.4-3.4 m off across the crests with sigmas under 2 m (two landings
-  // say too little of where the answer may be): docs/slam-every-seabed.md.
+  // back along, or along which plausible competitors run on past the probe, and the scatter of
+  // the other starts' landings, the nearby better fit or the plausible competitors added to the
+  // covariance of the rest. Off: on `small` sand waves it lowers the consistency RMSE 2-5x, but
+  // its loops there sit 2.5-3 m (2-3 sigma, one way) off across the crests under heading drift,
+  // beyond issue 14's 2 m: docs/slam-every-seabed.md.
   bool doubt_widens = false;
 
   template <typename Field>
@@ -113,7 +113,7 @@ struct QualityConfig {
   }
 };
 
-// Each factor in (0, 1], piecewise linear between the knots given in the README ("MCHS").
+// Each factor in (0, 1], piecewise linear between the knots given in docs/slam-core.md ("Quality-aware information").
 double inlier_ratio_weight(double inlier_ratio);
 double overlap_mse_weight(double mse_m2);
 double overlap_points_weight(double points);

@@ -26,7 +26,7 @@ struct CandidateConfig {
   int k_adjacent_lines = 3;            // Table 1 (a)
   double parallel_tolerance_deg = 20;  // lines within this of parallel or antiparallel
   // Intersection over the smaller footprint. Table 1's "overlap coverage 0.9" cannot hold between
-  // lawnmower lines that share only ~40 % of a swath; see the README.
+  // lawnmower lines that share only ~40 % of a swath; see docs/slam-core.md, "Departures from Table 1".
   double min_overlap_fraction = 0.1;
   // Loop candidates: submaps this many apart in time or more (nearer ones are odometry's).
   int loop_min_submap_gap = 5;

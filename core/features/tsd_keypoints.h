@@ -17,8 +17,8 @@ struct KeypointConfig {  // Table 1 (b)
   double percentile = 70;                   // keypoints pass this percentile at every scale
   int descriptor_size = 11;                 // d x d elevation samples
   // A departure from the paper: a per-submap percentile alone selects 30 % of the cells, flat
-  // or not, so keypoints must also stand above the sounding noise of a flat bottom (README,
-  // "MCHS"); without it the feature density could never fall below the switch threshold.
+  // or not, so keypoints must also stand above the sounding noise of a flat bottom
+  // (docs/slam-core.md, "Departures from Table 1"); without it the feature density could never fall below the switch threshold.
   double min_tsd_m = 0.08;     // at the finest scale
   int suppression_radius = 0;  // cells; 0 (the paper): every cell that passes is a keypoint
   int orientation_bins = 36;

@@ -23,7 +23,7 @@ constexpr std::size_t kPreparedSubmapsBudgetBytes = std::size_t{512} << 20;
 
 // The register stage frees ~1.5 GB on `large` (prepared submaps, features) in pieces the allocator
 // keeps for reuse, but the map made next needs pieces of other sizes: without this, a process's
-// peak is the register stage's memory plus the map's (README "Performance").
+// peak is the register stage's memory plus the map's (docs/performance.md).
 void return_freed_memory() {
 #if defined(__GLIBC__)
   malloc_trim(0);

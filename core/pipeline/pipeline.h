@@ -64,7 +64,7 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config,
 
 // The same from submaps the caller built (build_submaps with `config.submaps`, or a reader
 // streaming the pings into a SubmapBuilder, so that a survey's soundings are never held twice:
-// README "Performance"); `submaps_seconds`, the time that took, is the "submaps" stage's.
+// docs/performance.md); `submaps_seconds`, the time that took, is the "submaps" stage's.
 PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
                             const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
 

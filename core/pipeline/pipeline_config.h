@@ -71,7 +71,7 @@ struct PipelineConfig {
   // paper's baseline: the default weight of Table 1, its DR noise (5, 5, 1 m; 1e-4, 1e-4,
   // 1e-2 rad). From dead reckoning GICP keeps its guess's horizontal error, and on slopes that
   // error turns into a wrong depth, so a registration knows no more than a DR step does
-  // (README, "The three configurations", has the comparison).
+  // (docs/slam-core.md, "The three configurations", has the comparison).
   struct UniformInformation {
     Eigen::Vector3d sigma_translation_m{5.0, 5.0, 1.0};
     Eigen::Vector3d sigma_rotation_rad{1e-4, 1e-4, 1e-2};

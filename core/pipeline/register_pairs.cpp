@@ -86,7 +86,7 @@ std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const I
   if (reg.path != RegistrationPath::kDirect || spread <= 0) return std::nullopt;
   const double chi2 = config.robustness.pcm.plausibility.chi2_threshold;
   std::optional<std::string> doubt;
-  for (const Eigen::Vector2d side : {Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)}) {
+  for (const Eigen::Vector2d& side : {Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)}) {
     const Eigen::Vector2d shift = spread * side.normalized();
     Eigen::Isometry3d start = reg.coarse;
     start.pretranslate(Eigen::Vector3d(shift.x(), shift.y(), 0));
@@ -104,6 +104,7 @@ std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const I
       if (!doubt) doubt = format("from %.1f m aside GICP lands %.2f m away (Mahalanobis2 %.1f > %.1f)", spread,
                                  landed.norm(), m2, chi2);
     }
+    if (doubt && !quality.doubt_widens) break;  // only widening needs both landings
   }
   return doubt;
 }

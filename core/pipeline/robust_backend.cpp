@@ -86,13 +86,17 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   const DrInnovation innovation = dr_innovation(edge_of(c), dr, dr_poses);
   const Vector6& difference = innovation.difference;
   const Eigen::LDLT<Eigen::Matrix3d> gate(xy_yaw_block(dr.covariance(c.from, c.to) + innovation.measurement));
-  Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets, for the report
+  Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets
   int plausible = 0;
   double nearest = std::numeric_limits<double>::infinity();
+  const auto gate_at = [&](const Eigen::Vector2d& along) {
+    const Eigen::Vector3d d(difference(0) + along.x(), difference(1) + along.y(), difference(5));
+    return d.dot(gate.solve(d));
+  };
+  const auto plausible_at = [&](const Eigen::Vector2d& along) { return gate_at(along) <= config.chi2_threshold; };
   for (const Eigen::Vector2d& offset : competitors) {
     const Eigen::Vector2d along = (level_from_target * Eigen::Vector3d(offset.x(), offset.y(), 0)).head<2>();
-    const Eigen::Vector3d d(difference(0) + along.x(), difference(1) + along.y(), difference(5));
-    const double m2 = d.dot(gate.solve(d));
+    const double m2 = gate_at(along);
     nearest = std::min(nearest, m2);
     if (m2 > config.chi2_threshold) continue;
     ++plausible;
@@ -117,10 +121,26 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   // answer's own information was tried: on `small` sand waves and on `lake` such edges sat
   // 7-17 sigma off across the line, the truth not among the probe's competitors.
   c.alias_spread_m = spread_of(plausible_spread / plausible);
-  c.information = widens && carries_horizontal_information(c.information)
-                      ? with_horizontal_spread(c.information, plausible_spread / plausible)
-                      : without_horizontal(c.information);
   c.alias = AliasResolution::kInformationRemoved;
+  if (!widens || !carries_horizontal_information(c.information)) {
+    c.information = without_horizontal(c.information);
+    return;
+  }
+  // Along a direction where plausible competitors go on past what the probe compared (a crest,
+  // a flat, a strip of overlap) their scatter measures the probe, not the alias: nothing is
+  // known there.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(plausible_spread);
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector2d axis = axes.eigenvectors().col(k);
+    for (const Eigen::Vector2d& offset : u.competitor_offsets(true)) {
+      const Eigen::Vector2d o = (level_from_target * Eigen::Vector3d(offset.x(), offset.y(), 0)).head<2>();
+      if (std::abs(o.dot(axis)) < std::abs(o.dot(Eigen::Vector2d(-axis.y(), axis.x())))) continue;
+      if (!plausible_at(o)) continue;
+      c.information = without_direction(c.information, axis);
+      break;
+    }
+  }
+  c.information = with_horizontal_spread(c.information, plausible_spread / plausible);
 }
 
 bool refused_by_prior(const Rejection& rejection, const Plan& plan) {

@@ -1,7 +1,7 @@
 #pragma once
 // What the pipeline, the map and a survey's summary need of its pings, made as a reader hands
-// them on (bundle.h's PingSink), so that the soundings are never held whole (README
-// "Performance").
+// them on (bundle.h's PingSink), so that the soundings are never held whole
+// (docs/performance.md).
 #include <optional>
 #include <span>
 #include <vector>

@@ -4,7 +4,7 @@
 // so a 2-D grid of columns (x, y cells holding a few points each, stored column by column) finds
 // a point's neighbours in the handful of columns around it, nearest columns first, and stops
 // when no further column can hold anything closer. On `lake` it took 22-25 % off our GICP's
-// CPU against nanoflann's KD-tree (README, "Performance"). The answers are exact in 3-D: a
+// CPU against nanoflann's KD-tree (docs/performance.md). The answers are exact in 3-D: a
 // column ring is skipped only when its horizontal distance alone exceeds what was found; steep
 // walls just make columns fuller. Float points: a submap sits in its own frame, within a few
 // hundred metres of its origin, where float keeps millimetres.

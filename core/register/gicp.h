@@ -21,7 +21,7 @@ struct GicpConfig {  // Table 1 (c)
   // bias that the 3 m gate's noise and swath edges leave (~0.2 m, ~0.8 deg; gicp_test.cpp). From
   // a 2 m, 3 deg error this recovers textured pairs to a few centimetres, but from dead reckoning
   // on flat pairs it lets yaw slide where nothing constrains it, which costs the `gicp` baseline
-  // (README, "Registration"); the feature-aided path starts it close instead.
+  // (docs/slam-core.md, "Departures from Table 1"); the feature-aided path starts it close instead.
   bool about_centroid = false;
   double refine_correspondence_m = 0.0;  // 0: no second pass
   double refine_convergence = 1e-6;
@@ -29,12 +29,12 @@ struct GicpConfig {  // Table 1 (c)
   // benchmark and as a setting), 1 ours (gicp_solver.h) on submaps prepared once
   // (gicp_cloud.h), same parameters and rule, registering a sample of the soundings
   // (soundings_per_sample); more accurate than PCL's and 5.7x faster per pair on `lake`, 2.0x
-  // on every sounding (README, Benchmarks, Performance).
+  // on every sounding (docs/performance.md).
   int engine = 1;
   // Ours only: directions (rotations in metres at the overlap) that the terrain observes less
   // than this share of the best-observed one keep the guess's value instead of sliding on the
   // plane covariances' pull along the seabed (gicp_solver.cpp, observed_step). On `lake` the
-  // flattest direct pairs show ~1e-4, textured ones 2e-3 and more (README, "Our GICP").
+  // flattest direct pairs show ~1e-4, textured ones 2e-3 and more (docs/performance.md).
   double min_observed_share = 0.0005;
   // Ours only: a pass that turns the source further than this from where it started has left the
   // basin it started in and ends, not converged. GICP starts within dead reckoning's few degrees
@@ -48,7 +48,7 @@ struct GicpConfig {  // Table 1 (c)
   // pair started 12 m off took 300 iterations to lower its cost by 12 %, every point searched
   // again each time, to an answer 11 m off); more iterations move it, hardly fitting it better.
   // 40, not 20: at 20 `lake` seed 1's consistency RMSE rose 16 %, at 40 it did not move
-  // (README, "Performance"). 0: never.
+  // (docs/performance.md). 0: never.
   int stall_iterations = 40;
   // Ours only: GICP registers one sounding in this many, spread evenly (the one nearest the
   // centre of each column of a grid sized to hold this many a column), each with its plane from

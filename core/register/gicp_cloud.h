@@ -11,7 +11,7 @@
 // and the plane is the k = 20 nearest soundings' (Table 1). Soundings closer together than that
 // neighbourhood lie on the same planes and say the same thing about the pose; their noise is what
 // differs, and the registration's error is set by the terrain's shape and the submaps' own
-// distortion, not by that noise (README, "Performance"). The covariances still come from every
+// distortion, not by that noise (docs/performance.md). The covariances still come from every
 // sounding, so the planes are as good as before.
 #include <cstdint>
 #include <functional>

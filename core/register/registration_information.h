@@ -2,7 +2,7 @@
 // register: what a registration observed. The GICP cost's Gauss–Newton Hessian at the solution
 // says which directions the overlap pins down (a flat bottom: depth, roll, pitch; sand waves:
 // also across their crests) and which it leaves free; the edge information keeps that shape and
-// takes its scale from the quality weight (README, "Quality-aware information").
+// takes its scale from the quality weight (docs/slam-core.md, "Quality-aware information").
 #include <cstddef>
 #include <vector>
 

@@ -96,11 +96,12 @@ bool Uniqueness::unique() const {
   return probed && std::find(competitors.begin(), competitors.end(), true) == competitors.end();
 }
 
-std::vector<Eigen::Vector2d> Uniqueness::competitor_offsets() const {
+std::vector<Eigen::Vector2d> Uniqueness::competitor_offsets(bool open) const {
   std::vector<Eigen::Vector2d> offsets;
   const int side = 2 * reach + 1;
-  for (std::size_t k = 0; k < competitors.size(); ++k) {
-    if (!competitors[k]) continue;
+  const std::vector<bool>& mask = open ? open_competitors : competitors;
+  for (std::size_t k = 0; k < mask.size(); ++k) {
+    if (!mask[k]) continue;
     const int i = static_cast<int>(k % side) - reach, j = static_cast<int>(k / side) - reach;
     offsets.emplace_back(i * step_m, j * step_m);
   }
@@ -180,6 +181,17 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
     for (int i = -reach; i <= reach; ++i) {
       const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);
       u.competitors[k] = std::hypot(i, j) * config.step_m >= config.exclusion_m && cost[k] < competing;
+    }
+  }
+  const auto compared_at = [&](int i, int j) {
+    return std::abs(i) <= reach && std::abs(j) <= reach && std::isfinite(cost[static_cast<std::size_t>(j + reach) * side + (i + reach)]);
+  };
+  u.open_competitors.assign(cost.size(), false);
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);
+      u.open_competitors[k] = u.competitors[k] && !(compared_at(i - 1, j) && compared_at(i + 1, j) &&
+                                                    compared_at(i, j - 1) && compared_at(i, j + 1));
     }
   }
   u.alternative_cost_m2 = u.typical_cost_m2;

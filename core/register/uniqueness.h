@@ -72,8 +72,11 @@ struct Uniqueness {
   int reach = 0;
   double step_m = 0;
   std::vector<bool> competitors;
-  // The competing offsets (target frame, m).
-  std::vector<Eigen::Vector2d> competitor_offsets() const;
+  // Competitors beside an offset that was not compared (beyond the search radius, or too little
+  // overlap there): the competing region goes on past what the probe saw. Same layout.
+  std::vector<bool> open_competitors;
+  // The competing offsets (target frame, m); with `open`, those at the probe's edge only.
+  std::vector<Eigen::Vector2d> competitor_offsets(bool open = false) const;
   // Probed, and nothing within reach competes: the answer is the terrain's, whatever the start.
   bool unique() const;
 };

@@ -104,7 +104,7 @@ std::vector<NavSample> apply_paper_drift(const std::vector<NavSample>& truth, do
 
 DvlDrift make_heading_walk_drift() {
   DvlDrift drift;
-  drift.heading_bias_walk_rad_per_sqrt_s = 2.5e-3;  // RMSE ~27 m on lake averaged over seeds (README)
+  drift.heading_bias_walk_rad_per_sqrt_s = 2.5e-3;  // RMSE ~27 m on lake averaged over seeds (docs/simulator.md)
   return drift;
 }
 

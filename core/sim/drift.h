@@ -27,7 +27,7 @@ struct DvlDrift {
 };
 
 // dvl's sensors but a heading bias that wanders by degrees over a survey, as a poorly aided gyro
-// does: tens of metres of DR error on `lake` (README), beyond what registration corrects from a
+// does: tens of metres of DR error on `lake` (docs/simulator.md), beyond what registration corrects from a
 // dead-reckoning guess.
 DvlDrift make_heading_walk_drift();
 

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
 #include <cmath>
 #include <filesystem>
 #include <mutex>
@@ -14,6 +17,7 @@
 #include "core/io/bundle.h"
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/streamed_survey.h"
+#include "core/products/map_products.h"
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/report.h"
 #include "core/sim/simulator.h"
@@ -242,6 +246,75 @@ TEST_F(MchsPipeline, ReportCarriesTheResult) {
   PipelineConfig again;
   for (const auto& [name, value] : j.at("parameters").items()) set_parameter(again, name, value.get<double>());
   EXPECT_EQ(parameters(again), parameters(r.config));
+}
+
+// The service stores report.json and answers GetReport from it: the summary read back is the
+// one written, and a report missing a key is refused by name, not read as zeros.
+TEST_F(MchsPipeline, ReportSummaryReadsBackFromItsJsonExactly) {
+  const PipelineResult& r = result();
+  const ReportSummary written = report_summary(r);
+  nlohmann::json j = report_json(r);
+  const ReportSummary read = report_summary_from_json(j);
+  EXPECT_EQ(read.configuration, written.configuration);
+  using Pair = std::pair<ErrorStats, ErrorStats>;
+  for (const auto& [a, b] : {Pair{read.trajectory, written.trajectory}, Pair{read.trajectory_dr, written.trajectory_dr},
+                             Pair{read.consistency, written.consistency}, Pair{read.consistency_dr, written.consistency_dr}}) {
+    EXPECT_DOUBLE_EQ(a.rmse, b.rmse);
+    EXPECT_DOUBLE_EQ(a.p99, b.p99);
+    EXPECT_DOUBLE_EQ(a.max, b.max);
+    EXPECT_EQ(a.count, b.count);
+  }
+  EXPECT_DOUBLE_EQ(read.histogram.bin_width, written.histogram.bin_width);
+  EXPECT_EQ(read.histogram.counts, written.histogram.counts);
+  for (const auto& [name, counts] : written.by_type) {
+    EXPECT_EQ(read.by_type.at(name).accepted, counts.accepted) << name;
+    EXPECT_EQ(read.by_type.at(name).rejections, counts.rejections) << name;
+  }
+  EXPECT_EQ(read.by_path.size(), written.by_path.size());
+
+  j.at("consistency_error_m").erase("dead_reckoning");
+  try {
+    report_summary_from_json(j);
+    FAIL() << "a report without the dead-reckoning consistency must not be read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("dead_reckoning"), std::string::npos) << e.what();
+  }
+}
+
+// What `process` and a job hand over as the map: the COG that GDAL reads with the run's grid and
+// CRS, the BAG, a .tif, .vdb and .png per tile, the plots; nothing at all when no cell has
+// enough soundings.
+TEST_F(MchsPipeline, MapProductsAreWrittenAsGdalReadsThem) {
+  const PipelineResult& r = result();
+  const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "map_products";
+  std::filesystem::remove_all(dir);
+  const MapFiles files = write_map_products(r, small_survey().metadata, FuseConfig{}, dir);
+  ASSERT_TRUE(files.written);
+  GDALAllRegister();
+  const std::unique_ptr<GDALDataset> map(GDALDataset::Open((dir / "map.tif").c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+  ASSERT_NE(map, nullptr);
+  EXPECT_EQ(map->GetRasterXSize(), files.geometry.width);
+  EXPECT_EQ(map->GetRasterYSize(), files.geometry.height);
+  const OGRSpatialReference* crs = map->GetSpatialRef();
+  ASSERT_NE(crs, nullptr);
+  OGRSpatialReference survey_crs;
+  survey_crs.SetFromUserInput(small_survey().metadata.crs.c_str());
+  EXPECT_TRUE(crs->IsSame(&survey_crs));
+  EXPECT_TRUE(std::filesystem::exists(dir / "map.bag"));
+  ASSERT_FALSE(files.tile_ids.empty());
+  for (const TileId& id : files.tile_ids) {
+    for (const char* extension : {".tif", ".vdb", ".png"}) {
+      EXPECT_TRUE(std::filesystem::exists(dir / "tiles" / (tile_stem(id).string() + extension))) << tile_stem(id) << extension;
+    }
+  }
+  EXPECT_EQ(files.plots, (std::vector<std::string>{"map.png", "map_difference.png"})) << "mchs moved the map";
+  for (const std::string& plot : files.plots) EXPECT_TRUE(std::filesystem::exists(dir / plot)) << plot;
+
+  FuseConfig sparse;
+  sparse.min_soundings = 1 << 30;
+  const std::filesystem::path empty = dir / "empty";
+  EXPECT_FALSE(write_map_products(r, small_survey().metadata, sparse, empty).written);
+  EXPECT_FALSE(std::filesystem::exists(empty));
 }
 
 // Issue 31 on a seabed `lake`'s mounds do not make: patches of sand waves, boulders, a channel, a

@@ -212,6 +212,12 @@ Uniqueness probed_with(const std::vector<Eigen::Vector2d>& competing) {
   return u;
 }
 
+// Marks `open` (competitors already) as running on past what the probe compared.
+void mark_open(Uniqueness& u, const std::vector<Eigen::Vector2d>& open) {
+  u.open_competitors.assign(u.competitors.size(), false);
+  for (const Eigen::Vector2d& o : open) u.open_competitors[static_cast<std::size_t>((o.y() + 24) * 49 + (o.x() + 24))] = true;
+}
+
 // Sand waves 10 m apart, crests along y: the terrain also fits 10 and 20 m away across them.
 std::vector<Eigen::Vector2d> sand_wave_aliases() { return {{-20, 0}, {-10, 0}, {10, 0}, {20, 0}}; }
 
@@ -288,22 +294,46 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
 }
 
 // With doubt_widens, the same answer along a line of plausible aliases keeps its position across
-// the line (the crests' period is what the line is narrow by) and nothing along it.
+// the line, as well as the line is narrow, and nothing along it where the line runs on past
+// what the probe compared; a patch whose competitors run on every way keeps nothing.
 TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) {
   const Survey2Lines s = two_lines(20, 7);
-  // Crests along x this time: the aliases lie along x, 1 m either side of the answer's line.
+  // Crests along x: the aliases lie along x, the probe's overlap ending at |x| = 20.
   std::vector<Eigen::Vector2d> along_crest;
   for (int x = -20; x <= 20; ++x) {
     if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
   }
-  Constraint c = direct_registration(s, 15, 24, probed_with(along_crest));
-  resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
+  Uniqueness crest = probed_with(along_crest);
+  Constraint closed = direct_registration(s, 15, 24, crest);
+  resolve_alias(closed, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity(), true);
-  EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
-  EXPECT_NEAR(c.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
-  EXPECT_LT(c.information(0, 0), 0.02) << "along it: no better than the aliases' spread, 12 m";
-  EXPECT_NEAR(c.information(5, 5), 0.0, 1e-12) << "no yaw";
-  EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
+  EXPECT_EQ(closed.alias, AliasResolution::kInformationRemoved);
+  EXPECT_NEAR(closed.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
+  EXPECT_GT(closed.information(0, 0), 0.0);
+  EXPECT_LT(closed.information(0, 0), 0.02) << "along it: no better than the aliases' spread, 12 m";
+  EXPECT_NEAR(closed.information(5, 5), 0.0, 1e-12) << "no yaw";
+  EXPECT_GT(closed.information(2, 2), 50.0) << "depth stays";
+
+  mark_open(crest, {{-20, 0}, {20, 0}});
+  Constraint open = direct_registration(s, 15, 24, crest);
+  resolve_alias(open, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity(), true);
+  EXPECT_NEAR(open.information(0, 0), 0.0, 1e-9) << "the line runs on: nothing along it";
+  EXPECT_NEAR(open.information(1, 1), 100.0, 1.0);
+
+  std::vector<Eigen::Vector2d> around, rim;
+  for (int x = -6; x <= 6; ++x) {
+    for (int y = -6; y <= 6; ++y) {
+      if (std::hypot(x, y) >= 3) around.emplace_back(x, y);
+      if (std::max(std::abs(x), std::abs(y)) == 6) rim.emplace_back(x, y);
+    }
+  }
+  Uniqueness patch_probe = probed_with(around);
+  mark_open(patch_probe, rim);
+  Constraint patch = direct_registration(s, 15, 24, patch_probe);
+  resolve_alias(patch, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
+                Eigen::Matrix3d::Identity(), true);
+  for (int k : {0, 1, 5}) EXPECT_NEAR(patch.information(k, k), 0.0, 1e-9) << k;
 }
 
 // GICP, started 1.06 m aside on both diagonals, comes back across the crests (y) but stays where

@@ -89,6 +89,23 @@ TEST(Uniqueness, AFlatBottomHasNoUniqueAnswer) {
   const Uniqueness u = probe_at_truth([](const Eigen::Vector2d&) { return -10.0; });
   ASSERT_TRUE(u.probed);
   EXPECT_LT(u.distinctness(), 3.0);
+  // Everything compared competes, so the competing region runs on past it on every side.
+  const std::vector<Eigen::Vector2d> open = u.competitor_offsets(true);
+  ASSERT_FALSE(open.empty());
+  Eigen::Vector2d lowest = open.front(), highest = open.front();
+  for (const Eigen::Vector2d& o : open) lowest = lowest.cwiseMin(o), highest = highest.cwiseMax(o);
+  EXPECT_LT(lowest.x(), -10.0);
+  EXPECT_GT(highest.x(), 10.0);
+  EXPECT_LT(lowest.y(), -10.0);
+  EXPECT_GT(highest.y(), 10.0);
+  for (const Eigen::Vector2d& o : open) EXPECT_GT(o.norm(), 5.0) << "only at the rim of what was compared";
+}
+
+// Mounds: nothing competes, so nothing runs on.
+TEST(Uniqueness, MoundsLeaveNoOpenCompetitors) {
+  const SyntheticTerrain mounds = SyntheticTerrain::with_mounds(5);
+  const Uniqueness u = probe_at_truth([&](const Eigen::Vector2d& p) { return mounds.elevation(p); });
+  EXPECT_TRUE(u.competitor_offsets(true).empty());
 }
 
 }  // namespace

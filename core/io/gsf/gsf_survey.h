@@ -1,7 +1,7 @@
 #pragma once
 // GSF files as a bathyslam Survey, and a Survey's pings as a GSF file.
 //
-// Reading (README, "GSF in"): every ping header gives a navigation sample (latitude/longitude
+// Reading (docs/formats.md, "GSF in"): every ping header gives a navigation sample (latitude/longitude
 // projected into the survey's CRS, depth corrector as vehicle depth, roll, pitch, heading);
 // every usable beam of a usable ping gives a sounding in the vehicle frame. GSF stores beams
 // in a level frame aligned with the heading (attitude already applied), so the reader takes
