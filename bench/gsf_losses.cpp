@@ -1,5 +1,5 @@
 // bench_gsf_losses BUNDLE OUT_PREFIX: writes copies of a bundle that each carry one of the
-// losses a GSF round trip imposes (README, "GSF out"), so that `bathyslam process` on each
+// losses a GSF round trip imposes (docs/formats.md, "GSF out"), so that `bathyslam process` on each
 // shows which loss moves the trajectory error:
 //
 //   OUT_PREFIX.pingnav    navigation only at the ping times (interpolated, not rounded)
@@ -12,7 +12,7 @@
 //                         a perturbation of the size of the beams' rounding, not the rounding
 //
 // STEP is the beam arrays' resolution (--step, 0.001 m: the writer's millimetres). With
-// --dither-only, only the ditherK copies: the noise floor of a figure (README, "Performance").
+// --dither-only, only the ditherK copies: the noise floor of a figure (docs/performance.md).
 #include <cmath>
 #include <cstdio>
 #include <random>

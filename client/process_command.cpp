@@ -64,7 +64,7 @@ void run_process(const ProcessOptions& o) {
 
   const auto start = std::chrono::steady_clock::now();
   // The soundings are never held whole: nothing reads them again but --export-gsf, which reads
-  // the input again (README "Performance").
+  // the input again (docs/performance.md).
   PipelineInputs inputs(config.submaps);
   const Survey survey = load_survey(o.survey.input(), inputs).survey;  // without its soundings
   SubmapSet submaps = inputs.take_submaps();
