@@ -13,8 +13,8 @@ namespace {
 
 // A node as one parameter block: position, then the unit quaternion as Eigen stores it (x, y, z,
 // w). One block per pose rather than two keeps the normal equations in whole 6x6 blocks, which
-// the sparse Cholesky orders and factors faster (`large`'s final graph, bench_regraph: 2.1 s
-// against 2.5 s with SuiteSparse).
+// the sparse Cholesky orders and factors faster (bench_regraph on `large`'s final graph:
+// docs/performance.md).
 constexpr int kNodeSize = 7;
 using Node = Eigen::Matrix<double, kNodeSize, 1>;
 using NodeManifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
@@ -88,8 +88,8 @@ GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
 
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  // Eigen's sparse Cholesky factors these graphs in about half SuiteSparse's time (`large`'s
-  // final graph: 1.2 s against 2.1 s, to the same cost; bench_regraph).
+  // Eigen's sparse Cholesky factors these graphs in about half SuiteSparse's time, to the same
+  // cost (bench_regraph on `large`'s final graph: docs/performance.md).
   options.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
   options.max_num_iterations = config.max_iterations;
   options.num_threads = 1;

@@ -18,7 +18,7 @@ namespace {
 // Submaps prepared for our GICP kept between batches (~1.4 MB each): `lake` (~490 MB) keeps
 // nearly all; `large` keeps the last 3-4 lines', which its next adjacent pairs reuse, instead of
 // growing by the whole survey. On `large` half a GiB prepares 2 % more submaps again than 1 GiB
-// (2980 against 2918 preparations of 2727) and lowers the peak from 3.8 to 3.3 GiB.
+// and lowers the peak by half a GiB (docs/performance.md).
 constexpr std::size_t kPreparedSubmapsBudgetBytes = std::size_t{512} << 20;
 
 // The register stage frees ~1.5 GB on `large` (prepared submaps, features) in pieces the allocator
@@ -180,10 +180,10 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     if (end < n && first_changed < end) {
       // The submaps registered so far: the later ones would hang off them by odometry alone and
       // move along without bending anything, so the solve grows with the survey mapped so far
-      // instead of being the whole survey's 290 times over (`large`: 119 of 462 s). And only
+      // instead of being the whole survey's 290 times over. And only
       // from the first submap a registration entering or leaving the graph touches: the earlier
       // ones stay where the last solve put them (the final solve moves everything), or else the
-      // solves grow with the square of the survey (`large`: 54 of 264 s).
+      // solves grow with the square of the survey (both measured on `large`: docs/performance.md).
       const auto start = std::chrono::steady_clock::now();
       estimate = solve(estimate, r.constraints, r.navigation_noise.graph, end, first_changed).poses;
       r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
