@@ -368,7 +368,7 @@ class ServiceApiTest(unittest.TestCase):
         self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.surveys.ListSurveys,
                          survey_pb2.ListSurveysRequest(page_token="nonsense"))
         survey_id = self.create("bad jobs")
-        for configuration, parameters, field in [("slam", {}, "configuration"), ("", {}, "configuration"),
+        for configuration, parameters, field in [("slam", {}, "configuration"),
                                                  ("gicp", {"registration.gicp.max_iterations": "0"}, "parameters[registration.gicp.max_iterations]"),
                                                  ("gicp", {"no.such": "1"}, "parameters[no.such]")]:
             details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, self.jobs.SubmitJob,
