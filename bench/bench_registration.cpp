@@ -112,7 +112,7 @@ void BM_PclGicp(benchmark::State& state) {
       const Stopwatch watch;
       GicpConfig gicp = pair.coarse.gicp;
       gicp.engine = 0;
-      const PairRegistration r = register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source],
+      const PairRegistration r = register_direct(pcl_pair(*g_input->clouds[pair.target], *g_input->clouds[pair.source]),
                                                  pair.coarse.start, gicp, g_input->crop_margin_m);
       record(o, pair, r, watch);
     }
@@ -148,9 +148,8 @@ Outcome run_own(benchmark::State& state, int threads, double soundings_per_sampl
     for (const Pair& pair : g_input->pairs) {
       const Stopwatch watch;
       const PairRegistration r =
-          register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source], pair.coarse.start,
-                          config(pair), g_input->crop_margin_m, false,
-                          {prepared[pair.target].get(), prepared[pair.source].get()});
+          register_direct(PairClouds{prepared[pair.target].get(), prepared[pair.source].get()}, pair.coarse.start,
+                          config(pair), g_input->crop_margin_m);
       record(o, pair, r, watch);
     }
   }
@@ -194,8 +193,8 @@ void BM_OwnGicpPairsInParallel(benchmark::State& state) {
       GicpConfig gicp = pair.coarse.gicp;
       gicp.engine = 1;
       gicp.threads = 1;
-      results[k] = register_direct(*g_input->clouds[pair.target], *g_input->clouds[pair.source], pair.coarse.start,
-                                   gicp, g_input->crop_margin_m, false, {&cache.at(pair.target), &cache.at(pair.source)});
+      results[k] = register_direct(PairClouds{&cache.at(pair.target), &cache.at(pair.source)}, pair.coarse.start, gicp,
+                                   g_input->crop_margin_m);
     });
     o.all_pairs_seconds = watch.wall_seconds();
     o.all_pairs_cpu_seconds = watch.cpu_seconds();

@@ -231,9 +231,8 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
     // PCL's GICP registers on the filtered clouds, all made first. Ours registers on submaps the
     // cache prepares from them on first use, filtering each then: `large`'s filtered clouds
     // would not fit beside its submaps.
-    const bool own_gicp = config.registration.gicp.engine == 1;
     std::vector<Cloud::Ptr> clouds;
-    if (!own_gicp) {
+    if (!plan.own_gicp) {
       report("filter", 0);
       clouds = filtered_clouds(r.submaps, config.voxel, plan, cancel);
       clock.done("filter");

@@ -183,6 +183,8 @@ struct Plan {
   bool direct_loops = false;      // loop closures without features by the direct path, within reach
   bool estimate_noise = false;    // the survey's own DR noise instead of Table 1's
   bool alias_from_prior = false;  // aliases dead reckoning rules out do not refuse an answer
+  bool own_gicp = false;             // our GICP on prepared submaps, else PCL's on filtered clouds
+  bool hessian_information = false;  // registrations' information shaped by the GICP cost's Hessian
   int threads = 0;             // resolved: at least 1
 };
 Plan plan_of(const PipelineConfig& config);

@@ -114,12 +114,13 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
                          const std::atomic<bool>* cancel) {
   const CandidatePair& pair = candidate.pair;
   const Eigen::Isometry3d guess = estimate[pair.target].inverse() * estimate[pair.source];
-  const bool with_hessian = plan.quality_aware && config.quality.information_from_hessian;
-  // Ours registers on the prepared submaps alone (coarse_to_fine.h): no clouds are held for it.
-  static const Cloud kNone;
-  const Cloud& target = in.clouds.empty() ? kNone : *in.clouds[pair.target];
-  const Cloud& source = in.clouds.empty() ? kNone : *in.clouds[pair.source];
-  auto prepared = [&] { return prepared_pair(in.prepared, config.registration.gicp, pair.target, pair.source, cancel); };
+  const bool with_hessian = plan.hessian_information;
+  // Asked for only when GICP runs: ours prepares a submap on its first registration, and the
+  // switch may leave a loop closure unregistered.
+  auto clouds = [&] {
+    return plan.own_gicp ? prepared_pair(in.prepared, pair.target, pair.source, cancel)
+                         : pcl_pair(*in.clouds[pair.target], *in.clouds[pair.source]);
+  };
   PairRegistration reg;
   bool direct_loop = false;  // a loop closure the switch sends down the direct path
   std::string loop_reach;    // why such a loop is out of the direct path's reach; empty: within it
@@ -139,12 +140,10 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
       reg = unregistered(coarse, guess);
       reg.why += ", " + loop_reach;
     } else {
-      reg = register_from_start(coarse, target, source, target_features, source_features, config.registration,
-                                with_hessian, prepared());
+      reg = register_from_start(coarse, clouds(), target_features, source_features, config.registration, with_hessian);
     }
   } else {
-    reg = register_direct(target, source, guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian,
-                          prepared());
+    reg = register_direct(clouds(), guess, config.registration.gicp, config.registration.crop_margin_m, with_hessian);
   }
   Constraint c = constraint_of(candidate, reg, guess);
   if (plan.quality_aware) {
@@ -160,8 +159,7 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
         c.information.row(5).setZero(), c.information.col(5).setZero();
       }
       const auto from = [&](const Eigen::Isometry3d& start) {
-        return register_direct(target, source, start, config.registration.gicp, config.registration.crop_margin_m, false,
-                               prepared());
+        return register_direct(clouds(), start, config.registration.gicp, config.registration.crop_margin_m, false);
       };
       std::optional<std::string> doubt;
       OtherAnswers others;
@@ -198,7 +196,7 @@ std::vector<Constraint> register_pairs(const std::vector<Candidate>& candidates,
   // same loop (no barrier between); a loop closure's older submap only when its pair
   // registers, because the switch may send that pair down the direct path, unregistered.
   std::vector<int> to_prepare;
-  if (config.registration.gicp.engine == 1) {
+  if (plan.own_gicp) {
     for (const Candidate& c : candidates) {
       if (c.type == ConstraintType::kAdjacent) to_prepare.insert(to_prepare.end(), {c.pair.target, c.pair.source});
     }

@@ -73,21 +73,25 @@ PairRegistration observe_at(const GicpCloud& target, const GicpCloud& source, co
   return r;
 }
 
-PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source,
-                           const std::atomic<bool>* cancel) {
-  if (gicp.engine != 1) return {};
-  return {&cache.at(static_cast<std::size_t>(target)), &cache.at(static_cast<std::size_t>(source)), cancel};
+PairClouds prepared_pair(GicpCloudCache& cache, int target, int source, const std::atomic<bool>* cancel) {
+  return {&cache.at(static_cast<std::size_t>(target)), &cache.at(static_cast<std::size_t>(source)), nullptr, nullptr, cancel};
 }
 
-PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian, PreparedPair prepared) {
-  if (gicp.engine == 1) {
-    std::shared_ptr<const GicpCloud> own_target, own_source;
-    if (prepared.target == nullptr) prepared.target = (own_target = prepare_gicp_cloud(target, gicp)).get();
-    if (prepared.source == nullptr) prepared.source = (own_source = prepare_gicp_cloud(source, gicp)).get();
-    return register_direct_prepared(*prepared.target, *prepared.source, guess, gicp, crop_margin_m, with_hessian,
-                                    prepared.cancel);
+OneOffPair one_off_pair(const Cloud& target, const Cloud& source, const GicpConfig& gicp) {
+  if (!uses_own_gicp(gicp)) return {nullptr, nullptr, pcl_pair(target, source)};
+  OneOffPair pair{prepare_gicp_cloud(target, gicp), prepare_gicp_cloud(source, gicp), {}};
+  pair.clouds = {pair.target.get(), pair.source.get()};
+  return pair;
+}
+
+PairRegistration register_direct(const PairClouds& clouds, const Eigen::Isometry3d& guess, const GicpConfig& gicp,
+                                 double crop_margin_m, bool with_hessian) {
+  if (clouds.prepared_target != nullptr) {
+    return register_direct_prepared(*clouds.prepared_target, *clouds.prepared_source, guess, gicp, crop_margin_m,
+                                    with_hessian, clouds.cancel);
   }
+  const Cloud& target = *clouds.target;
+  const Cloud& source = *clouds.source;
   const Cloud::Ptr target_overlap = crop_to_overlap(target, source, guess.inverse(), crop_margin_m);
   const Cloud::Ptr source_overlap = crop_to_overlap(source, target, guess, crop_margin_m);
   PairRegistration r;
@@ -165,11 +169,11 @@ PairRegistration with_switch_decision(PairRegistration r, const CoarseStart& c) 
 
 }  // namespace
 
-PairRegistration register_from_start(const CoarseStart& c, const Cloud& target, const Cloud& source,
+PairRegistration register_from_start(const CoarseStart& c, const PairClouds& clouds,
                                      const SubmapFeatures& target_features, const SubmapFeatures& source_features,
-                                     const CoarseToFineConfig& config, bool with_hessian, PreparedPair prepared) {
-  PairRegistration r = with_switch_decision(
-      register_direct(target, source, c.start, c.gicp, config.crop_margin_m, with_hessian, prepared), c);
+                                     const CoarseToFineConfig& config, bool with_hessian) {
+  PairRegistration r =
+      with_switch_decision(register_direct(clouds, c.start, c.gicp, config.crop_margin_m, with_hessian), c);
   r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
   return r;
 }
@@ -181,12 +185,11 @@ PairRegistration unregistered(const CoarseStart& c, const Eigen::Isometry3d& gue
   return with_switch_decision(r, c);
 }
 
-PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+PairRegistration register_coarse_to_fine(const PairClouds& clouds, const SubmapFeatures& target_features,
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian,
-                                         PreparedPair prepared) {
-  return register_from_start(coarse_start(target_features, source_features, guess, config, seed), target, source,
-                             target_features, source_features, config, with_hessian, prepared);
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian) {
+  return register_from_start(coarse_start(target_features, source_features, guess, config, seed), clouds,
+                             target_features, source_features, config, with_hessian);
 }
 
 }  // namespace bathyslam

@@ -89,15 +89,31 @@ struct PairRegistration {
   GicpHessian hessian;
 };
 
-// What our GICP (GicpConfig::engine 1) registers with: the two submaps prepared, from a
-// GicpCloudCache (null: prepared on the fly from the clouds, which costs what the cache saves),
-// and the job's cancel flag, which ends a registration within an iteration (null: none). PCL's
-// GICP ignores them.
-struct PreparedPair {
-  const GicpCloud* target = nullptr;
-  const GicpCloud* source = nullptr;
+// A pair's two submaps as the chosen GICP reads them: ours (GicpConfig::engine 1) on submaps
+// prepared once (from a GicpCloudCache: prepared_pair), PCL's on the filtered clouds
+// (pcl_pair). `cancel` ends our registration within an iteration (null: never); PCL's GICP
+// ignores it.
+struct PairClouds {
+  const GicpCloud* prepared_target = nullptr;  // ours: both set
+  const GicpCloud* prepared_source = nullptr;
+  const Cloud* target = nullptr;  // PCL's: both set
+  const Cloud* source = nullptr;
   const std::atomic<bool>* cancel = nullptr;
 };
+
+// The pair's submaps from `cache`, prepared on first use, for our GICP.
+PairClouds prepared_pair(GicpCloudCache& cache, int target, int source, const std::atomic<bool>* cancel = nullptr);
+
+// The pair's filtered clouds, for PCL's GICP.
+inline PairClouds pcl_pair(const Cloud& target, const Cloud& source) { return {nullptr, nullptr, &target, &source}; }
+
+// A pair registered once, outside a job (tests, benchmarks): its clouds as `gicp`'s engine reads
+// them, ours prepared now and held here.
+struct OneOffPair {
+  std::shared_ptr<const GicpCloud> target, source;
+  PairClouds clouds;
+};
+OneOffPair one_off_pair(const Cloud& target, const Cloud& source, const GicpConfig& gicp);
 
 // The coarse half: the switch's decision and, on the feature-aided path, RANSAC's estimate, so
 // where GICP starts and with which settings. No GICP runs here.
@@ -116,28 +132,22 @@ CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeat
                          const Eigen::Isometry3d& guess, const CoarseToFineConfig& config, uint64_t seed);
 
 // The fine half: GICP from the coarse start, with the uniqueness probe about its answer.
-PairRegistration register_from_start(const CoarseStart& coarse, const Cloud& target, const Cloud& source,
+PairRegistration register_from_start(const CoarseStart& coarse, const PairClouds& clouds,
                                      const SubmapFeatures& target_features, const SubmapFeatures& source_features,
-                                     const CoarseToFineConfig& config, bool with_hessian = false,
-                                     PreparedPair prepared = {});
+                                     const CoarseToFineConfig& config, bool with_hessian = false);
 
 // A pair left unregistered after the coarse half: its switch decision, and `guess` as its answer,
 // not converged and with no overlap measured.
 PairRegistration unregistered(const CoarseStart& coarse, const Eigen::Isometry3d& guess);
-
-// The pair's submaps from `cache` when our GICP registers (gicp.engine 1), none for PCL's.
-PreparedPair prepared_pair(GicpCloudCache& cache, const GicpConfig& gicp, int target, int source,
-                           const std::atomic<bool>* cancel = nullptr);
 
 // Both halves. `guess`: the DR-predicted pose of source in target. `seed` makes RANSAC
 // reproducible per pair.
 // `with_hessian`: also the GICP cost's Hessian at the result (PairRegistration::hessian), for
 // quality.information_from_hessian; it costs about as much again as the registration, so only
 // the information that needs it asks.
-PairRegistration register_coarse_to_fine(const Cloud& target, const Cloud& source, const SubmapFeatures& target_features,
+PairRegistration register_coarse_to_fine(const PairClouds& clouds, const SubmapFeatures& target_features,
                                          const SubmapFeatures& source_features, const Eigen::Isometry3d& guess,
-                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false,
-                                         PreparedPair prepared = {});
+                                         const CoarseToFineConfig& config, uint64_t seed, bool with_hessian = false);
 
 // What the overlap of two prepared submaps observes at `source_to_target`, without registering:
 // its quality, its anchor and the GICP cost's Hessian there, on the direct path. At the truth
@@ -146,9 +156,8 @@ PairRegistration observe_at(const GicpCloud& target, const GicpCloud& source, co
                             const GicpConfig& gicp, double crop_margin_m);
 
 // Direct GICP on the clouds' overlap under `guess`, with the source overlap's centroid and, if
-// `with_hessian`, the cost's Hessian there.
-PairRegistration register_direct(const Cloud& target, const Cloud& source, const Eigen::Isometry3d& guess,
-                                 const GicpConfig& gicp, double crop_margin_m, bool with_hessian = false,
-                                 PreparedPair prepared = {});
+// `with_hessian`, the cost's Hessian there; by ours where `clouds` are prepared, else by PCL's.
+PairRegistration register_direct(const PairClouds& clouds, const Eigen::Isometry3d& guess, const GicpConfig& gicp,
+                                 double crop_margin_m, bool with_hessian = false);
 
 }  // namespace bathyslam

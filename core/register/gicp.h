@@ -77,6 +77,10 @@ struct GicpConfig {  // Table 1 (c)
   }
 };
 
+// Whether `config` registers with our GICP (engine 1) rather than PCL's: the one place that
+// reads the engine (the pipeline's Plan asks it once; one-off registrations too).
+inline bool uses_own_gicp(const GicpConfig& config) { return config.engine == 1; }
+
 struct RegistrationQuality {
   bool converged = false;
   double fitness = 0;              // overlap_points over all source points (Open3D's fitness)

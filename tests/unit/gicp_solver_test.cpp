@@ -78,7 +78,7 @@ TEST(OwnGicp, RecoversAKnownOffsetOnMounds) {
   const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
   const Eigen::Isometry3d guess = off(p.truth);
   for (const GicpConfig& config : {ours(), ours(large_offset())}) {
-    const PairRegistration r = register_direct(*p.target, *p.source, guess, config, 1.0);
+    const PairRegistration r = register_direct(one_off_pair(*p.target, *p.source, config).clouds, guess, config, 1.0);
     const Eigen::Isometry3d error = p.truth.inverse() * r.registration.source_to_target;
     EXPECT_TRUE(r.registration.quality.converged);
     EXPECT_LT(error.translation().norm(), 0.05) << "about_centroid " << config.about_centroid << ": "
@@ -140,10 +140,10 @@ TEST(OwnGicp, AssociatorFindsTheBruteForceNeighbours) {
 TEST(OwnGicp, APassThatTurnsBeyondTheLimitDoesNotConverge) {
   const MoundPair p = mound_pair(SyntheticTerrain::with_mounds(7, 14));
   GicpConfig config = ours();
-  const PairRegistration within = register_direct(*p.target, *p.source, off(p.truth), config, 1.0);
+  const PairRegistration within = register_direct(one_off_pair(*p.target, *p.source, config).clouds, off(p.truth), config, 1.0);
   EXPECT_TRUE(within.registration.quality.converged);
   config.max_turn_deg = 1.0;  // the guess is 3 degrees off
-  const PairRegistration beyond = register_direct(*p.target, *p.source, off(p.truth), config, 1.0);
+  const PairRegistration beyond = register_direct(one_off_pair(*p.target, *p.source, config).clouds, off(p.truth), config, 1.0);
   EXPECT_FALSE(beyond.registration.quality.converged);
 }
 
@@ -153,11 +153,11 @@ TEST(OwnGicp, ACancelledRegistrationStopsAtOnce) {
   const auto target = prepare_gicp_cloud(*p.target, GicpConfig{}), source = prepare_gicp_cloud(*p.source, GicpConfig{});
   std::atomic<bool> cancel = false;
   const PairRegistration running =
-      register_direct(*p.target, *p.source, off(p.truth), ours(), 1.0, false, {target.get(), source.get(), &cancel});
+      register_direct(PairClouds{target.get(), source.get(), nullptr, nullptr, &cancel}, off(p.truth), ours(), 1.0);
   EXPECT_TRUE(running.registration.quality.converged);
   cancel = true;
   const PairRegistration stopped =
-      register_direct(*p.target, *p.source, off(p.truth), ours(), 1.0, false, {target.get(), source.get(), &cancel});
+      register_direct(PairClouds{target.get(), source.get(), nullptr, nullptr, &cancel}, off(p.truth), ours(), 1.0);
   EXPECT_FALSE(stopped.registration.quality.converged);
   EXPECT_TRUE(stopped.registration.source_to_target.isApprox(off(p.truth)));
 }
@@ -174,8 +174,8 @@ TEST(OwnGicp, AgreesWithPclOnAnAdjacentLinePairOfASimulatedSurvey) {
   const Cloud::Ptr target = voxel_filter(set.submaps[pair.target].points);
   const Cloud::Ptr source = voxel_filter(set.submaps[pair.source].points);
 
-  const PairRegistration reference = register_direct(*target, *source, guess, pcl_gicp(large_offset()), 1.0);
-  const PairRegistration own = register_direct(*target, *source, guess, ours(large_offset()), 1.0);
+  const PairRegistration reference = register_direct(pcl_pair(*target, *source), guess, pcl_gicp(large_offset()), 1.0);
+  const PairRegistration own = register_direct(one_off_pair(*target, *source, ours(large_offset())).clouds, guess, ours(large_offset()), 1.0);
   ASSERT_TRUE(reference.registration.quality.converged);
   ASSERT_TRUE(own.registration.quality.converged);
   const Eigen::Isometry3d apart = reference.registration.source_to_target.inverse() * own.registration.source_to_target;
@@ -213,7 +213,7 @@ TEST(OwnGicp, HessianIsTheCostsOnTheSameCorrespondences) {
   EXPECT_LT((lin.hessian - reference.hessian).norm(), 1e-3 * reference.hessian.norm());
   EXPECT_LT((lin.regularisation - reference.regularisation).norm(), 1e-6 * reference.regularisation.norm());
   // register_direct hands the same Hessian on at its answer.
-  const PairRegistration r = register_direct(*p.target, *p.source, p.truth, ours(), 1.0, /*with_hessian=*/true);
+  const PairRegistration r = register_direct(one_off_pair(*p.target, *p.source, ours()).clouds, p.truth, ours(), 1.0, /*with_hessian=*/true);
   EXPECT_GT(r.hessian.correspondences, 0u);
   EXPECT_TRUE(r.hessian.hessian.allFinite());
   EXPECT_GT(r.hessian.hessian.determinant(), 0);
@@ -256,15 +256,15 @@ TEST(OwnGicp, EmptyOrTinyCloudsDoNotConverge) {
   Cloud tiny;
   for (int i = 0; i < 10; ++i) tiny.push_back((*p.source)[i * 100]);
   for (const Cloud* source : std::vector<const Cloud*>{&empty, &tiny}) {
-    const PairRegistration r = register_direct(*p.target, *source, p.truth, ours(), 1.0, true);
+    const PairRegistration r = register_direct(one_off_pair(*p.target, *source, ours()).clouds, p.truth, ours(), 1.0, true);
     EXPECT_FALSE(r.registration.quality.converged);
     EXPECT_TRUE(r.registration.source_to_target.isApprox(p.truth)) << "the guess comes back";
     EXPECT_EQ(r.hessian.correspondences, 0u);
   }
-  const PairRegistration both_empty = register_direct(empty, empty, p.truth, ours(), 1.0);
+  const PairRegistration both_empty = register_direct(one_off_pair(empty, empty, ours()).clouds, p.truth, ours(), 1.0);
   EXPECT_FALSE(both_empty.registration.quality.converged);
   // Clouds that do not overlap under the guess: nothing to register.
-  const PairRegistration apart = register_direct(*p.target, *p.source, planar_pose(500, 0, 0) * p.truth, ours(), 1.0);
+  const PairRegistration apart = register_direct(one_off_pair(*p.target, *p.source, ours()).clouds, planar_pose(500, 0, 0) * p.truth, ours(), 1.0);
   EXPECT_FALSE(apart.registration.quality.converged);
 }
 
@@ -298,7 +298,7 @@ TEST(OwnGicp, AFlatBottomPinsDepthAndStaysFinite) {
   const MoundPair p = mound_pair(SyntheticTerrain::flat(), 0.01);
   Eigen::Isometry3d guess = off(p.truth);
   guess.translation().z() += 0.4;  // depth is what a flat bottom observes
-  const PairRegistration r = register_direct(*p.target, *p.source, guess, ours(), 1.0);
+  const PairRegistration r = register_direct(one_off_pair(*p.target, *p.source, ours()).clouds, guess, ours(), 1.0);
   EXPECT_TRUE(r.registration.quality.converged);
   EXPECT_TRUE(r.registration.source_to_target.matrix().allFinite());
   const Eigen::Isometry3d error = p.truth.inverse() * r.registration.source_to_target;

@@ -38,13 +38,13 @@ TEST(AdaptiveRansac, RecoversAKnownTransformFromMatchesThatAre60PercentOutliers)
   EXPECT_TRUE(again.source_to_target.isApprox(r.source_to_target)) << "deterministic for a seed";
 }
 
-struct PairClouds {
+struct TerrainPair {
   Cloud::Ptr target, source;
   SubmapFeatures target_features, source_features;
 };
 
 // Two submaps of `terrain`: the target frame at the world origin, the source at `source_pose`.
-PairClouds pair_of(const SyntheticTerrain& target_terrain, const SyntheticTerrain& source_terrain,
+TerrainPair pair_of(const SyntheticTerrain& target_terrain, const SyntheticTerrain& source_terrain,
                    const Eigen::Isometry3d& source_pose) {
   Submap a, b;
   a.points = target_terrain.sample(Eigen::Isometry3d::Identity(), 0.03, 5);
@@ -115,15 +115,15 @@ TEST(ObservabilitySwitch, FlatSubmapsGoDirectAndRoughOnesFeatureAided) {
   const CoarseToFineConfig config;
 
   const SyntheticTerrain flat = SyntheticTerrain::flat();
-  const PairClouds f = pair_of(flat, flat, truth);
-  const PairRegistration direct = register_coarse_to_fine(*f.target, *f.source, f.target_features, f.source_features,
+  const TerrainPair f = pair_of(flat, flat, truth);
+  const PairRegistration direct = register_coarse_to_fine(one_off_pair(*f.target, *f.source, config.gicp).clouds, f.target_features, f.source_features,
                                                           guess, config, 1);
   EXPECT_EQ(direct.path, RegistrationPath::kDirect) << direct.why;
   EXPECT_LT(direct.feature_density, config.switching.min_feature_density);
 
   const SyntheticTerrain rough = SyntheticTerrain::with_mounds(21);
-  const PairClouds r = pair_of(rough, rough, truth);
-  const PairRegistration aided = register_coarse_to_fine(*r.target, *r.source, r.target_features, r.source_features,
+  const TerrainPair r = pair_of(rough, rough, truth);
+  const PairRegistration aided = register_coarse_to_fine(one_off_pair(*r.target, *r.source, config.gicp).clouds, r.target_features, r.source_features,
                                                          guess, config, 1);
   ASSERT_EQ(aided.path, RegistrationPath::kFeatureAided) << aided.why;
   EXPECT_GE(aided.matches, config.matching.min_matches);
@@ -137,18 +137,18 @@ TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
   // Same kind of ground, different mounds: dead reckoning claims they overlap.
   const SyntheticTerrain here = SyntheticTerrain::with_mounds(31), there = SyntheticTerrain::with_mounds(32);
   const Eigen::Isometry3d claimed = planar_pose(6.0, 4.0, 8.0);
-  const PairClouds p = pair_of(here, there, claimed);
+  const TerrainPair p = pair_of(here, there, claimed);
   const CoarseToFineConfig config;
-  const PairRegistration r = register_coarse_to_fine(*p.target, *p.source, p.target_features, p.source_features,
+  const PairRegistration r = register_coarse_to_fine(one_off_pair(*p.target, *p.source, config.gicp).clouds, p.target_features, p.source_features,
                                                      claimed, config, 1);
   EXPECT_TRUE(rejection_of(r, claimed, {}, true).rejected()) << "accepted: " << r.why << ", inliers " << r.inlier_ratio;
 }
 
 TEST(DirectRegistration, ASliverOfOverlapIsRefusedNotRegistered) {
   const SyntheticTerrain rough = SyntheticTerrain::with_mounds(41);
-  const PairClouds p = pair_of(rough, rough, planar_pose(0, 0, 0));
+  const TerrainPair p = pair_of(rough, rough, planar_pose(0, 0, 0));
   // Dead reckoning puts the source 39.5 m east: a strip of a few points overlaps.
-  const PairRegistration r = register_direct(*p.target, *p.source, planar_pose(39.9, 0, 0), GicpConfig{}, 0.0);
+  const PairRegistration r = register_direct(one_off_pair(*p.target, *p.source, GicpConfig{}).clouds, planar_pose(39.9, 0, 0), GicpConfig{}, 0.0);
   EXPECT_FALSE(r.registration.quality.converged);
   EXPECT_EQ(rejection_of(r, planar_pose(39.9, 0, 0), {}, false).kind, RejectionKind::kNoOverlap);
 }
@@ -228,8 +228,8 @@ TEST(QualityWeights, FromTheHessianADirectEdgeKeepsWhatItsOverlapObserved) {
   const Information6 best = information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
   const Eigen::Isometry3d truth = planar_pose(6.0, 4.0, 8.0);
   auto shares = [&](const SyntheticTerrain& terrain) {
-    const PairClouds p = pair_of(terrain, terrain, truth);
-    const PairRegistration r = register_direct(*p.target, *p.source, truth, GicpConfig{}, 1.0, true);
+    const TerrainPair p = pair_of(terrain, terrain, truth);
+    const PairRegistration r = register_direct(one_off_pair(*p.target, *p.source, GicpConfig{}).clouds, truth, GicpConfig{}, 1.0, true);
     EXPECT_GT(r.hessian.correspondences, 1000u);
     const Information6 information = quality_information(r, config);
     return Eigen::Matrix<double, 6, 1>(information.diagonal().cwiseQuotient(quality_weight(r) * best.diagonal()));
@@ -240,8 +240,8 @@ TEST(QualityWeights, FromTheHessianADirectEdgeKeepsWhatItsOverlapObserved) {
   const Eigen::Matrix<double, 6, 1> rough = shares(SyntheticTerrain::with_mounds(21));
   for (int k = 0; k < 6; ++k) EXPECT_GT(rough(k), 0.2) << "mounds: axis " << k;
 
-  const PairClouds p = pair_of(SyntheticTerrain::flat(), SyntheticTerrain::flat(), truth);
-  const PairRegistration without = register_direct(*p.target, *p.source, truth, GicpConfig{}, 1.0);
+  const TerrainPair p = pair_of(SyntheticTerrain::flat(), SyntheticTerrain::flat(), truth);
+  const PairRegistration without = register_direct(one_off_pair(*p.target, *p.source, GicpConfig{}).clouds, truth, GicpConfig{}, 1.0);
   EXPECT_EQ(without.hessian.correspondences, 0u) << "not computed unless asked for";
   EXPECT_THROW(quality_information(without, config), std::invalid_argument);
 }
