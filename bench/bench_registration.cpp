@@ -110,10 +110,8 @@ void BM_PclGicp(benchmark::State& state) {
     o = {};
     for (const Pair& pair : g_input->pairs) {
       const Stopwatch watch;
-      GicpConfig gicp = pair.coarse.gicp;
-      gicp.engine = 0;
       const PairRegistration r = register_direct(pcl_pair(*g_input->clouds[pair.target], *g_input->clouds[pair.source]),
-                                                 pair.coarse.start, gicp, g_input->crop_margin_m);
+                                                 pair.coarse.start, pair.coarse.gicp, g_input->crop_margin_m);
       record(o, pair, r, watch);
     }
   }
@@ -131,7 +129,6 @@ Outcome run_own(benchmark::State& state, int threads, double soundings_per_sampl
     std::map<int, std::shared_ptr<const GicpCloud>> prepared;
     auto config = [&](const Pair& pair) {
       GicpConfig gicp = pair.coarse.gicp;
-      gicp.engine = 1;
       gicp.threads = threads;
       if (soundings_per_sample > 0) gicp.soundings_per_sample = soundings_per_sample;
       return gicp;
@@ -191,7 +188,6 @@ void BM_OwnGicpPairsInParallel(benchmark::State& state) {
       k -= submaps.size();
       const Pair& pair = g_input->pairs[k];
       GicpConfig gicp = pair.coarse.gicp;
-      gicp.engine = 1;
       gicp.threads = 1;
       results[k] = register_direct(PairClouds{&cache.at(pair.target), &cache.at(pair.source)}, pair.coarse.start, gicp,
                                    g_input->crop_margin_m);

@@ -73,6 +73,12 @@ bool carries_horizontal_information(const Information6& information);
 // `information` with x, y and yaw taken out (rows and columns): depth, roll and pitch only.
 Information6 without_horizontal(Information6 information);
 
+// A horizontal offset in a registration's target frame (a probe's competitor, a start's shift)
+// in its level frame, where the edge's residual and information lie.
+inline Eigen::Vector2d level_offset(const Eigen::Matrix3d& level_from_target, const Eigen::Vector2d& offset) {
+  return (level_from_target * Eigen::Vector3d(offset.x(), offset.y(), 0)).head<2>();
+}
+
 // Where else a registration's overlap put its answer, as horizontal offsets from it in the
 // level frame (m): each start check's shift and where GICP landed from it, or the nearby better
 // fit alone (register_pairs.cpp, horizontal_doubt).

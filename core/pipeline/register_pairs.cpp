@@ -73,13 +73,10 @@ std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const I
                                             const std::function<PairRegistration(const Eigen::Isometry3d&)>& from,
                                             const PipelineConfig& config, const Eigen::Matrix3d& level_from_target,
                                             OtherAnswers& others) {
-  const auto level = [&](const Eigen::Vector2d& v) {
-    return (level_from_target * Eigen::Vector3d(v.x(), v.y(), 0)).head<2>().eval();
-  };
   const QualityConfig& quality = config.quality;
   const double improvement = reg.uniqueness.nearby_improvement();
   if (quality.max_nearby_improvement > 0 && improvement > quality.max_nearby_improvement) {
-    others.landings.push_back(level(reg.uniqueness.nearby_offset_m));
+    others.landings.push_back(level_offset(level_from_target, reg.uniqueness.nearby_offset_m));
     return format("the terrain fits %.1fx better %.1f m away", improvement, reg.uniqueness.nearby_offset_m.norm());
   }
   const double spread = quality.start_check_share * config.registration.gicp.max_correspondence_m;
@@ -95,8 +92,8 @@ std::optional<std::string> horizontal_doubt(const PairRegistration& reg, const I
                                      information);
     const Eigen::Vector3d landed =
         again.registration.source_to_target * reg.anchor - reg.registration.source_to_target * reg.anchor;
-    others.shifts.push_back(level(shift));
-    others.landings.push_back(level(landed.head<2>()));
+    others.shifts.push_back(level_offset(level_from_target, shift));
+    others.landings.push_back(level_offset(level_from_target, landed.head<2>()));
     if (!again.registration.quality.converged) {
       others.lost = true;
       doubt = format("from %.1f m aside GICP does not converge", spread);
@@ -170,9 +167,8 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
       }
       if (doubt) {
         c.horizontal_doubt = *doubt;
-        c.information = config.quality.doubt_widens && !others.landings.empty()
-                            ? widened_by_doubt(c.information, others, c.horizontal_spread)
-                            : without_horizontal(c.information);
+        c.information = config.quality.doubt_widens ? widened_by_doubt(c.information, others, c.horizontal_spread)
+                                                    : without_horizontal(c.information);
       }
     }
   } else {

@@ -93,9 +93,8 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
     const Eigen::Vector3d d(difference(0) + along.x(), difference(1) + along.y(), difference(5));
     return d.dot(gate.solve(d));
   };
-  const auto plausible_at = [&](const Eigen::Vector2d& along) { return gate_at(along) <= config.chi2_threshold; };
   for (const Eigen::Vector2d& offset : competitors) {
-    const Eigen::Vector2d along = (level_from_target * Eigen::Vector3d(offset.x(), offset.y(), 0)).head<2>();
+    const Eigen::Vector2d along = level_offset(level_from_target, offset);
     const double m2 = gate_at(along);
     nearest = std::min(nearest, m2);
     if (m2 > config.chi2_threshold) continue;
@@ -129,16 +128,18 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   // Along a direction where plausible competitors go on past what the probe compared (a crest,
   // a flat, a strip of overlap) their scatter measures the probe, not the alias: nothing is
   // known there.
+  std::vector<Eigen::Vector2d> open;
+  for (const Eigen::Vector2d& offset : u.competitor_offsets(true)) {
+    const Eigen::Vector2d along = level_offset(level_from_target, offset);
+    if (gate_at(along) <= config.chi2_threshold) open.push_back(along);
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(plausible_spread);
   for (int k = 0; k < 2; ++k) {
-    const Eigen::Vector2d axis = axes.eigenvectors().col(k);
-    for (const Eigen::Vector2d& offset : u.competitor_offsets(true)) {
-      const Eigen::Vector2d o = (level_from_target * Eigen::Vector3d(offset.x(), offset.y(), 0)).head<2>();
-      if (std::abs(o.dot(axis)) < std::abs(o.dot(Eigen::Vector2d(-axis.y(), axis.x())))) continue;
-      if (!plausible_at(o)) continue;
-      c.information = without_direction(c.information, axis);
-      break;
-    }
+    const Eigen::Vector2d axis = axes.eigenvectors().col(k), across(-axis.y(), axis.x());
+    const bool runs_on = std::any_of(open.begin(), open.end(), [&](const Eigen::Vector2d& o) {
+      return std::abs(o.dot(axis)) >= std::abs(o.dot(across));
+    });
+    if (runs_on) c.information = without_direction(c.information, axis);
   }
   c.information = with_horizontal_spread(c.information, plausible_spread / plausible);
 }

@@ -198,6 +198,9 @@ TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
 
 // A probe result by hand: the answer fits at 1e-3 m², and every offset in `competing` fits
 // nearly as well (a 49 x 49 square of offsets 1 m apart).
+// An offset's bit in a probe of reach 24, 1 m apart (Uniqueness::competitors' layout).
+std::size_t probe_bit(const Eigen::Vector2d& o) { return static_cast<std::size_t>((o.y() + 24) * 49 + (o.x() + 24)); }
+
 Uniqueness probed_with(const std::vector<Eigen::Vector2d>& competing) {
   Uniqueness u;
   u.probed = true;
@@ -206,7 +209,7 @@ Uniqueness probed_with(const std::vector<Eigen::Vector2d>& competing) {
   u.step_m = 1.0;
   u.competitors.assign(49 * 49, false);
   for (const Eigen::Vector2d& o : competing) {
-    u.competitors[static_cast<std::size_t>((o.y() + 24) * 49 + (o.x() + 24))] = true;
+    u.competitors[probe_bit(o)] = true;
   }
   u.alternative_cost_m2 = 2e-3;
   return u;
@@ -215,7 +218,7 @@ Uniqueness probed_with(const std::vector<Eigen::Vector2d>& competing) {
 // Marks `open` (competitors already) as running on past what the probe compared.
 void mark_open(Uniqueness& u, const std::vector<Eigen::Vector2d>& open) {
   u.open_competitors.assign(u.competitors.size(), false);
-  for (const Eigen::Vector2d& o : open) u.open_competitors[static_cast<std::size_t>((o.y() + 24) * 49 + (o.x() + 24))] = true;
+  for (const Eigen::Vector2d& o : open) u.open_competitors[probe_bit(o)] = true;
 }
 
 // Sand waves 10 m apart, crests along y: the terrain also fits 10 and 20 m away across them.
