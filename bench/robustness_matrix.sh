@@ -6,15 +6,17 @@
 # 1 % beyond 3 sigma).
 #   bench/robustness_matrix.sh [--scenario small] [--terrains "..."] [--drifts "..."]
 #                              [--seeds "1 2 3"] [--configs "odometry gicp mchs"] [--work DIR]
-#                              [--set "key=value ..."] [--tag NAME] [--floor]
+#                              [--set "key=value ..."] [--tag NAME] [--floor] [--altitude M]
 # --floor adds a `floor` row per bundle: the observable floor (bench_oracle_graph --observable),
-# every candidate pair at the truth with the information its overlap supports.
+# every candidate pair at the truth with the information its overlap supports. --altitude flies
+# the sonar that high, the world scaled with it (simulate --altitude; issue 38).
 # bench/matrix_summary.py turns the rows into means per terrain and drift with issue 31's checks.
 # Bundles go under DIR (default /tmp/bathyslam-robust) and are reused when present; each bundle
 # is deleted after its runs unless --keep is given (a `small` bundle is ~60 MB).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenario=small seeds="1 2 3" configs="odometry gicp mchs" work=/tmp/bathyslam-robust sets="" tag="" keep=0 floor=0
+altitude_args=() altitude_tag=""
 terrains="lake sandwaves boulders channel slopebreak flat mixed"
 drifts="paper dvl heading-walk compass-step"
 while [[ $# -gt 0 ]]; do
@@ -29,6 +31,7 @@ while [[ $# -gt 0 ]]; do
     --tag) tag=-$2; shift 2 ;;
     --keep) keep=1; shift ;;
     --floor) floor=1; shift ;;
+    --altitude) altitude_args=(--altitude "$2"); altitude_tag=-altitude$2; shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -43,9 +46,10 @@ echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for terrain in $terrains; do
   for drift in $drifts; do
     for seed in $seeds; do
-      bundle=$work/$scenario-$terrain-$drift-$seed
+      bundle=$work/$scenario$altitude_tag-$terrain-$drift-$seed
       [[ -f $bundle/survey.json ]] ||
-        "$bathyslam" simulate --scenario "$scenario" --terrain "$terrain" --drift "$drift" --seed "$seed" --out "$bundle" >/dev/null
+        "$bathyslam" simulate --scenario "$scenario" --terrain "$terrain" --drift "$drift" --seed "$seed" \
+          "${altitude_args[@]}" --out "$bundle" >/dev/null
       reports=()
       for config in $configs; do
         out=$bundle-$config$tag

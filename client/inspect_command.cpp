@@ -7,6 +7,8 @@
 #include "client/survey_options.h"
 #include "core/io/bundle.h"
 #include "core/io/survey_input.h"
+#include "core/pipeline/parameters.h"
+#include "core/pipeline/streamed_survey.h"
 #include "core/summary/survey_summary.h"
 
 namespace bathyslam::cli {
@@ -17,6 +19,10 @@ struct InspectOptions {
   bool json = false;
 };
 
+SurveySummary::Footprint footprint_of(const SoundingFootprint& measured) {
+  return {measured, footprint_scale(measured, PipelineConfig{})};
+}
+
 void inspect_bundle(const std::string& bundle, bool json) {
   BundleReadResult result = read_bundle(bundle);
   for (const Problem& p : result.problems) {
@@ -24,18 +30,21 @@ void inspect_bundle(const std::string& bundle, bool json) {
     else std::fprintf(stderr, "%s/%s\n", bundle.c_str(), p.to_string().c_str());
   }
   if (!result.survey) throw std::runtime_error(bundle + ": not a valid survey bundle");
-  const SurveySummary summary = summarize(*result.survey);
+  SurveySummary summary = summarize(*result.survey);
+  summary.footprint = footprint_of(sounding_footprint(*result.survey));
   if (json) std::printf("%s\n", to_json(summary).dump(2).c_str());
   else std::printf("%s", to_text(summary).c_str());
 }
 
 // GSF: what each file holds (pings, ignored pings, rejected beams, records), then the survey
-// bathyslam makes of them, read without its soundings (memory: the navigation, not the beams).
+// bathyslam makes of them, its pings outlined as they are read (memory: the navigation and each
+// ping's outline, not the beams).
 void inspect_gsf(const InspectOptions& o) {
-  SurveyInput input = o.survey.input();
-  input.keep_soundings = false;
-  const LoadedSurvey loaded = load_survey(input);
-  const SurveySummary summary = summarize(loaded.survey);
+  PingOutlines outlines;
+  LoadedSurvey loaded = load_survey(o.survey.input(), outlines);
+  loaded.survey.pings = outlines.pings_without_beams();
+  SurveySummary summary = summarize(loaded.survey);
+  summary.footprint = footprint_of(outlines.footprint(loaded.survey.nav));
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();
     for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));

@@ -100,7 +100,12 @@ void run_jobs(const JobOptions& o) {
   } while (!request.page_token().empty());
 }
 
-void print_stats(const char* label, const v1::ErrorStats& s, const v1::ErrorStats& dr) {
+// `figure`: the report.json section whose "not_computed" says why a figure with no values has none.
+void print_stats(const char* label, const v1::ErrorStats& s, const v1::ErrorStats& dr, const nlohmann::json& figure) {
+  if (figure.contains("not_computed")) {
+    std::printf("%-22s not computed: %s\n", label, figure["not_computed"].get<std::string>().c_str());
+    return;
+  }
   std::printf("%-22s %9.3f %9.3f %9.3f %9.3f %9.3f %9lld   (dead reckoning: rmse %.3f, p95 %.3f)\n", label, s.rmse(),
               s.mean(), s.p95(), s.p99(), s.max(), static_cast<long long>(s.count()), dr.rmse(), dr.p95());
 }
@@ -132,14 +137,15 @@ void run_report(const JobOptions& o) {
   if (o.json) {
     std::printf("%s\n", nlohmann::json::parse(report.report_json()).dump(2).c_str());
   } else {
+    const nlohmann::json full = nlohmann::json::parse(report.report_json());
     std::printf("job %lld, configuration %s\n\n", static_cast<long long>(report.job_id()), report.configuration().c_str());
     std::printf("%-22s %9s %9s %9s %9s %9s %9s\n", "error (m)", "rmse", "mean", "p95", "p99", "max", "count");
-    print_stats("consistency", report.consistency(), report.consistency_dr());
-    print_stats("trajectory", report.trajectory(), report.trajectory_dr());
+    print_stats("consistency", report.consistency(), report.consistency_dr(), full.value("consistency_error_m", nlohmann::json::object()));
+    print_stats("trajectory", report.trajectory(), report.trajectory_dr(), full.value("trajectory_error_m", nlohmann::json::object()));
     print_constraints("constraint", report.constraints_by_type());
     if (report.constraints_by_path_size() > 0) print_constraints("path", report.constraints_by_path());
     // Whether to trust the map: the safety net's verdict and what it dropped.
-    const nlohmann::json net = nlohmann::json::parse(report.report_json()).value("safety_net", nlohmann::json::object());
+    const nlohmann::json net = full.value("safety_net", nlohmann::json::object());
     if (net.contains("verdict")) {
       std::printf("\nsafety net: %s\n", net["verdict"].get<std::string>().c_str());
       for (const nlohmann::json& dropped : net.value("dropped", nlohmann::json::array())) {

@@ -33,7 +33,7 @@ struct AcceptanceConfig {  // Table 1 (b)
     field("min_inlier_ratio", min_inlier_ratio, 0, 1);
     field("max_overlap_mse_m2", max_overlap_mse_m2, 0, 1000);
     field("min_overlap_points", min_overlap_points, 0, 10000000);
-    field("max_translation_m", max_translation_m, 0, 100000);
+    field("max_translation_m", max_translation_m, 0, 1e5);
     field("max_competitor_ratio", max_competitor_ratio, 0, 1);
     field("min_distinctness", min_distinctness, 0, 1e6);
   }
@@ -99,7 +99,7 @@ struct QualityConfig {
 
   template <typename Field>
   void fields(Field&& field) {
-    xyz("best_sigma_translation_m", best_sigma_translation_m, 1e-4, 1e3, field);
+    xyz("best_sigma_translation_m", best_sigma_translation_m, 1e-4, 1e5, field);
     rpy("best_sigma_rotation_rad", best_sigma_rotation_rad, 1e-6, 10, field);
     field("direct_horizontal_share", direct_horizontal_share, 0, 1);
     field("direct_depth_from_relief", direct_depth_from_relief, 0, 1);

@@ -27,9 +27,9 @@ struct ConsistencyConfig {
   int histogram_bins = 100;
   template <typename Field>
   void fields(Field&& field) {
-    field("cell_m", cell_m, 0.05, 100);
+    field("cell_m", cell_m, 0.05, 1e5);
     field("min_soundings", min_soundings, 1, 1000);
-    field("histogram_bin_m", histogram_bin_m, 0.001, 10);
+    field("histogram_bin_m", histogram_bin_m, 0.001, 1e5);
     field("histogram_bins", histogram_bins, 1, 100000);
   }
 };

@@ -14,7 +14,7 @@ struct GridConfig {
   double idw_power = 2.0;
   template <typename Field>
   void fields(Field&& field) {
-    field("cell_m", cell_m, 0.05, 20);
+    field("cell_m", cell_m, 0.05, 1e5);
     field("idw_radius_cells", idw_radius_cells, 0.5, 10);
     field("idw_power", idw_power, 0, 10);
   }

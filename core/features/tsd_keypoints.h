@@ -29,7 +29,7 @@ struct KeypointConfig {  // Table 1 (b)
     field("window_scales.coarse", window_scales[2], 3, 63);
     field("percentile", percentile, 0, 100);
     field("descriptor_size", descriptor_size, 3, 63);
-    field("min_tsd_m", min_tsd_m, 0, 100);
+    field("min_tsd_m", min_tsd_m, 0, 1e5);
     field("suppression_radius", suppression_radius, 0, 50);
     field("orientation_bins", orientation_bins, 4, 360);
   }

@@ -17,9 +17,9 @@ struct VoxelConfig {
   float leaf_z_m = 0.1f;
   template <typename Field>
   void fields(Field&& field) {
-    field("leaf_x_m", leaf_x_m, 0.01, 10);
-    field("leaf_y_m", leaf_y_m, 0.01, 10);
-    field("leaf_z_m", leaf_z_m, 0.01, 10);
+    field("leaf_x_m", leaf_x_m, 0.01, 1e5);
+    field("leaf_y_m", leaf_y_m, 0.01, 1e5);
+    field("leaf_z_m", leaf_z_m, 0.01, 1e5);
   }
 };
 

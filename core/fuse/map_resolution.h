@@ -5,31 +5,9 @@
 // soundings a cell needs, and there is no map at all). The cell follows the
 // soundings instead: the finest of finest_m · 2^k at which an average cell of the swept area
 // holds twice `min_soundings` (twice: soundings thin out towards the swath's edges).
-#include <cstdint>
-#include <span>
-#include <vector>
-
-#include "core/types/survey.h"
+#include "core/submaps/sounding_footprint.h"
 
 namespace bathyslam {
-
-struct SweptArea {
-  double track_m = 0;        // distance sailed while pinging (see robust_track_length)
-  double swath_m = 0;        // median across-track width of a ping
-  double soundings = 0;
-  double density_per_m2() const;  // 0 when nothing was swept
-};
-
-// What the swept area needs of a ping, for a reader that does not keep the beams.
-struct PingSwath {
-  double time = 0;
-  double width_m = 0;  // across track, from its leftmost to its rightmost beam
-  std::uint32_t soundings = 0;
-};
-PingSwath ping_swath(double time, std::span<const Beam> beams);
-
-SweptArea swept_area(const std::vector<NavSample>& nav, const std::vector<PingSwath>& pings);
-SweptArea swept_area(const Survey& survey);
 
 double auto_map_resolution(const SweptArea& swept, int min_soundings, double finest_m = 0.5);
 double auto_map_resolution(const Survey& survey, int min_soundings, double finest_m = 0.5);

@@ -26,15 +26,15 @@ struct RansacConfig {  // Table 1 (b)
   template <typename Field>
   void fields(Field&& field) {
     field("max_iterations", max_iterations, 1, 1000000);
-    field("initial_threshold_m", initial_threshold_m, 0.01, 100);
+    field("initial_threshold_m", initial_threshold_m, 0.01, 1e5);
     field("sample_size", sample_size, 3, 100);
     field("target_inlier_ratio", target_inlier_ratio, 0.01, 1);
     field("min_inliers", min_inliers, 3, 100000);
     field("mad_scale", mad_scale, 0.1, 100);
-    field("min_threshold_m", min_threshold_m, 0.001, 100);
+    field("min_threshold_m", min_threshold_m, 0.001, 1e5);
     field("seed", seed, 0, 9007199254740992.0);  // 2^53: every integer a double holds
     field("find_competitor", find_competitor, 0, 1);
-    field("competitor_separation_m", competitor_separation_m, 0.01, 1000);
+    field("competitor_separation_m", competitor_separation_m, 0.01, 1e5);
   }
 };
 

@@ -17,7 +17,7 @@ struct MatchConfig {  // Table 1 (b)
   int min_matches = 30;          // fewer: the pair falls back to direct registration
   template <typename Field>
   void fields(Field&& field) {
-    field("max_distance_m", max_distance_m, 0.1, 1000);
+    field("max_distance_m", max_distance_m, 0.1, 1e5);
     field("min_ncc", min_ncc, -1, 1);
     field("ratio", ratio, 0.01, 1);
     field("min_matches", min_matches, 3, 100000);

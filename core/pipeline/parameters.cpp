@@ -122,4 +122,38 @@ std::map<std::string, double> parameters(const PipelineConfig& config) {
   return out;
 }
 
+namespace {
+
+// The power of `scale` a parameter's value goes with: 1 for a length, 2 for an area, 0 for the rest.
+int length_power(std::string_view name) {
+  if (name.starts_with("footprint.")) return 0;
+  if (name.ends_with("_m2")) return 2;
+  if (name.ends_with("_m") || name.starts_with("quality.best_sigma_translation_m.")) return 1;
+  return 0;
+}
+
+}  // namespace
+
+double footprint_scale(const SoundingFootprint& footprint, const PipelineConfig& config) {
+  if (config.footprint.scale > 0) return config.footprint.scale;
+  if (footprint.spacing_m <= 0) return 1;
+  return std::exp2(std::round(std::log2(footprint.spacing_m / kPaperSpacingM)));
+}
+
+PipelineConfig scaled_to_footprint(const PipelineConfig& config, double scale) {
+  if (scale == 1) return config;
+  const std::map<std::string, double> preset = parameters(preset_config(config.configuration));
+  PipelineConfig scaled = config;
+  scaled.fields([&](std::string_view key, auto& field, double, double) {
+    const int power = length_power(key);
+    using Field = std::remove_reference_t<decltype(field)>;
+    if constexpr (std::is_floating_point_v<Field>) {
+      if (power > 0 && static_cast<double>(field) == preset.at(std::string(key))) {
+        field = static_cast<Field>(field * std::pow(scale, power));
+      }
+    }
+  });
+  return scaled;
+}
+
 }  // namespace bathyslam

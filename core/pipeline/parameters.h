@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "core/pipeline/pipeline_config.h"
+#include "core/submaps/sounding_footprint.h"
 
 namespace bathyslam {
 
@@ -20,5 +21,13 @@ void set_parameter(PipelineConfig& config, const std::string& name, double value
 void set_parameter(PipelineConfig& config, std::string_view assignment);
 // Every parameter by name with its current value.
 std::map<std::string, double> parameters(const PipelineConfig& config);
+
+// How many times Table 1's lengths a survey of this footprint needs: `config.footprint.scale`
+// when set, else the power of two nearest its spacing over kPaperSpacingM (1 without soundings).
+double footprint_scale(const SoundingFootprint& footprint, const PipelineConfig& config);
+// `config` with every length (a parameter named *_m, the best sigmas of quality) still at its
+// preset's value times `scale`, every area (*_m2) times its square. A length set to any other
+// value is the user's and stays as given.
+PipelineConfig scaled_to_footprint(const PipelineConfig& config, double scale);
 
 }  // namespace bathyslam

@@ -209,14 +209,16 @@ void evaluate(PipelineResult& r, const Plan& plan) {
 namespace {
 
 // `built_since`: when the making of `built` began, for the "submaps" stage's time.
-PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_since, const PipelineConfig& config,
+PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_since, const PipelineConfig& given,
                    const ProgressFn& progress, const std::atomic<bool>* cancel) {
   auto report = [&](std::string_view stage, double fraction) {
     if (progress) progress(stage, fraction);
   };
-  const Plan plan = plan_of(config);
   PipelineResult r;
-  r.config = config;
+  r.footprint_scale = footprint_scale(built.footprint, given);
+  r.config = scaled_to_footprint(given, r.footprint_scale);
+  const PipelineConfig& config = r.config;
+  const Plan plan = plan_of(config);
   r.navigation_noise.graph = config.graph;
   StageClock clock(r.timings, built_since);
 

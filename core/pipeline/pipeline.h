@@ -35,7 +35,9 @@ struct StageTiming {
 };
 
 struct PipelineResult {
+  // As run: the lengths of the configuration given scaled to the survey's footprint.
   PipelineConfig config;
+  double footprint_scale = 1;  // of Table 1's lengths, for submaps.footprint (parameters.h)
   SubmapSet submaps;
   std::vector<Eigen::Isometry3d> dr_poses;
   std::vector<Eigen::Isometry3d> optimized_poses;

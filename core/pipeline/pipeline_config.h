@@ -24,6 +24,11 @@
 namespace bathyslam {
 
 enum class Configuration { kOdometry, kGicp, kMchs };
+
+// The sounding spacing (footprint.h) of the survey Table 1's lengths are for: 512 beams over 140°
+// from 9 m above the bed (0.1 m apart across track on average) at 2 m/s and 10 pings a second
+// (0.2 m along), as the paper's lake and our `lake` scenario.
+inline constexpr double kPaperSpacingM = 0.14;
 // The names, in one place: the CLI's choices, the service's check and the report use these.
 inline constexpr std::array<const char*, 3> kConfigurationNames{"odometry", "gicp", "mchs"};
 Configuration parse_configuration(const std::string& name);  // throws std::invalid_argument
@@ -146,6 +151,23 @@ struct PipelineConfig {
   ConsistencyConfig consistency;  // the evaluation's, of the published map
   int threads = 0;                // 0: all cores
 
+  // Every length above (a parameter named *_m, an area *_m2, the registration's best sigmas) is
+  // Table 1's, for the paper's survey: a T20-S ten metres over a lake bed, its soundings about
+  // kPaperSpacingM apart. A survey whose soundings lie `scale` times as far apart gets every length
+  // left at its preset's value `scale` times longer (scaled_to_footprint, parameters.h), so that a
+  // grid cell, a voxel or a correspondence distance holds as many soundings at 80 m altitude or in
+  // 2 km of water as in the lake.
+  struct FootprintScale {
+    // 0: measured, the power of two nearest the survey's sounding spacing over kPaperSpacingM (an
+    // octave: the lake's spacing varies by a few percent between surveys and keeps Table 1 exact);
+    // 1: Table 1's lengths as they are.
+    double scale = 0;
+    template <typename Field>
+    void fields(Field&& field) {
+      field("scale", scale, 0, 65536);
+    }
+  } footprint;
+
   template <typename Field>
   void fields(Field&& field) {
     nested("stages", stages, field);
@@ -164,6 +186,7 @@ struct PipelineConfig {
     nested("robustness", robustness, field);
     nested("consistency", consistency, field);
     field("threads", threads, 0, 1024);
+    nested("footprint", footprint, field);
   }
 };
 

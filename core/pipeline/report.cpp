@@ -9,7 +9,9 @@
 namespace bathyslam {
 namespace {
 
+// Null for no values: a figure over nothing is not zero, and a reader must not take it for one.
 nlohmann::json stats_json(const ErrorStats& s) {
+  if (s.count == 0) return nullptr;
   return {{"rmse", s.rmse}, {"mean", s.mean}, {"std", s.std}, {"p50", s.p50}, {"p95", s.p95},
           {"p99", s.p99},   {"max", s.max},   {"count", s.count}};
 }
@@ -45,6 +47,7 @@ nlohmann::json switch_decisions(const PipelineResult& r) {
 
 ErrorStats stats_from_json(const nlohmann::json& j) {
   ErrorStats s;
+  if (j.is_null()) return s;  // not computed (stats_json)
   s.rmse = j.at("rmse").get<double>();
   s.mean = j.at("mean").get<double>();
   s.std = j.at("std").get<double>();
@@ -156,6 +159,17 @@ nlohmann::json safety_net_json(const SafetyNet& net) {
 
 }  // namespace
 
+std::optional<std::string> trajectory_not_computed(const PipelineResult& r) {
+  if (!r.dr_trajectory_errors.empty()) return std::nullopt;
+  return std::string("no reference navigation");
+}
+
+std::optional<std::string> consistency_not_computed(const PipelineResult& r) {
+  if (r.dr_consistency.stats.count > 0) return std::nullopt;
+  return format("no map cell seen by two survey lines (%zu lines, %.2f m cells)", r.submaps.lines.size(),
+                r.config.consistency.cell_m);
+}
+
 ReportSummary report_summary(const PipelineResult& r) {
   ReportSummary s;
   s.configuration = to_string(r.config.configuration);
@@ -222,8 +236,20 @@ nlohmann::json report_json(const PipelineResult& r) {
                               {"dr_counts", r.dr_consistency.histogram.counts}};
   nlohmann::json timings = nlohmann::json::object();
   for (const StageTiming& t : r.timings) timings[t.stage] = t.seconds;
+  nlohmann::json trajectory = {{"optimized", stats_json(s.trajectory)},
+                               {"dead_reckoning", stats_json(s.trajectory_dr)},
+                               {"aligned", {{"optimized", stats_json(error_stats(r.aligned_trajectory_errors))},
+                                            {"dead_reckoning", stats_json(error_stats(r.dr_aligned_trajectory_errors))}}},
+                               {"per_pose", r.trajectory_errors}};
+  if (const auto why = trajectory_not_computed(r)) trajectory["not_computed"] = *why;
+  nlohmann::json consistency = {{"optimized", stats_json(s.consistency)},
+                                {"dead_reckoning", stats_json(s.consistency_dr)},
+                                {"histogram", histogram}};
+  if (const auto why = consistency_not_computed(r)) consistency["not_computed"] = *why;
   return {{"configuration", s.configuration},
           {"safety_net", safety_net_json(r.safety_net)},
+          {"footprint", {{"spacing_m", r.submaps.footprint.spacing_m}, {"altitude_m", r.submaps.footprint.altitude_m},
+                         {"scale", r.footprint_scale}}},
           {"parameters", parameters(r.config)},
           {"submaps", {{"count", r.submaps.submaps.size()},
                        {"lines", r.submaps.lines.size()},
@@ -235,14 +261,8 @@ nlohmann::json report_json(const PipelineResult& r) {
           {"graph", {{"converged", r.graph.converged}, {"iterations", r.graph.iterations},
                      {"initial_cost", r.graph.initial_cost}, {"final_cost", r.graph.final_cost},
                      {"batch_solves", r.batch_solves}, {"batch_solve_s", r.batch_solve_seconds}}},
-          {"trajectory_error_m", {{"optimized", stats_json(s.trajectory)},
-                                  {"dead_reckoning", stats_json(s.trajectory_dr)},
-                                  {"aligned", {{"optimized", stats_json(error_stats(r.aligned_trajectory_errors))},
-                                               {"dead_reckoning", stats_json(error_stats(r.dr_aligned_trajectory_errors))}}},
-                                  {"per_pose", r.trajectory_errors}}},
-          {"consistency_error_m", {{"optimized", stats_json(s.consistency)},
-                                   {"dead_reckoning", stats_json(s.consistency_dr)},
-                                   {"histogram", histogram}}},
+          {"trajectory_error_m", trajectory},
+          {"consistency_error_m", consistency},
           {"timings_s", timings}};
 }
 
@@ -257,16 +277,24 @@ std::string report_text(const PipelineResult& r) {
     ++registrations;
     accepted += k.in_graph() ? 1 : 0;
   }
-  char text[1024];
-  std::snprintf(text, sizeof text,
-                "configuration %s: %zu submaps on %zu lines, %zu/%zu registrations accepted\n"
-                "trajectory error   rmse %.2f m, mean %.2f m, std %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
-                "  aligned (2D)     rmse %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
-                "consistency error  rmse %.3f m, p95 %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
-                to_string(r.config.configuration).c_str(), r.submaps.submaps.size(), r.submaps.lines.size(),
-                accepted, registrations, t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse, c.rmse, c.p95, c.p99, c.count,
-                c0.rmse);
-  std::string summary = text;
+  std::string summary = format("configuration %s: %zu submaps on %zu lines, %zu/%zu registrations accepted\n",
+                               to_string(r.config.configuration).c_str(), r.submaps.submaps.size(),
+                               r.submaps.lines.size(), accepted, registrations);
+  summary += format("footprint          soundings %.3g m apart, %.3g m below the sonar: Table 1's lengths x %g\n",
+                    r.submaps.footprint.spacing_m, r.submaps.footprint.altitude_m, r.footprint_scale);
+  if (const auto why = trajectory_not_computed(r)) {
+    summary += "trajectory error   not computed: " + *why + "\n";
+  } else {
+    summary += format("trajectory error   rmse %.2f m, mean %.2f m, std %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
+                      "  aligned (2D)     rmse %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n",
+                      t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse);
+  }
+  if (const auto why = consistency_not_computed(r)) {
+    summary += "consistency error  not computed: " + *why + "\n";
+  } else {
+    summary += format("consistency error  rmse %.3f m, p95 %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
+                      c.rmse, c.p95, c.p99, c.count, c0.rmse);
+  }
   if (r.navigation_noise.estimated) {
     const NavigationNoiseEstimate& e = r.navigation_noise;
     summary += format("navigation noise   estimated from %.0f registrations: %.3f m and %.5f rad per submap step "
@@ -279,6 +307,12 @@ std::string report_text(const PipelineResult& r) {
   return summary;
 }
 
+namespace {
+
+std::string not_computed_suffix(const std::optional<std::string>& why) { return why ? ": not computed, " + *why : ""; }
+
+}  // namespace
+
 void write_report_plots(const PipelineResult& r, const std::filesystem::path& dir) {
   auto histogram_series = [](const Histogram& h, const std::string& label, uint8_t red, uint8_t green, uint8_t blue) {
     Series s{label, {}, red, green, blue, true};
@@ -286,8 +320,9 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     return s;
   };
   write_file_bytes(dir / "consistency_histogram.png",
-             plot_png({"Consistency error (" + to_string(r.config.configuration) + ")", "consistency error (m)",
-                       "cells"},
+             plot_png({"Consistency error (" + to_string(r.config.configuration) + ")" +
+                           not_computed_suffix(consistency_not_computed(r)),
+                       "consistency error (m)", "cells"},
                       {histogram_series(r.dr_consistency.histogram, "dead reckoning", 230, 120, 120),
                        histogram_series(r.consistency.histogram, "optimized", 40, 90, 200)}));
 
@@ -297,7 +332,8 @@ void write_report_plots(const PipelineResult& r, const std::filesystem::path& di
     return s;
   };
   write_file_bytes(dir / "trajectory_error.png",
-             plot_png({"Horizontal error against the reference", "submap (pose index)", "error (m)"},
+             plot_png({"Horizontal error against the reference" + not_computed_suffix(trajectory_not_computed(r)),
+                       "submap (pose index)", "error (m)"},
                       {per_pose(r.dr_trajectory_errors, "dead reckoning", 220, 60, 60),
                        per_pose(r.trajectory_errors, "optimized", 40, 90, 200)}));
 

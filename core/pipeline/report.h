@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -29,6 +30,11 @@ struct ReportSummary {
 };
 
 ReportSummary report_summary(const PipelineResult& result);
+
+// Why a figure could not be computed, or nullopt when it was: its statistics are then null in
+// report.json and the text says so, rather than a zero a reader would take for a perfect result.
+std::optional<std::string> trajectory_not_computed(const PipelineResult& result);   // no reference navigation
+std::optional<std::string> consistency_not_computed(const PipelineResult& result);  // no overlap between lines
 // Throws std::runtime_error naming the first key it misses: a report is read exactly, never as
 // zeros.
 ReportSummary report_summary_from_json(const nlohmann::json& report);

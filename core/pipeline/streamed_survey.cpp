@@ -13,6 +13,10 @@ SweptArea PingOutlines::swept_area(const std::vector<NavSample>& nav) const {
   return bathyslam::swept_area(nav, swaths_);
 }
 
+SoundingFootprint PingOutlines::footprint(const std::vector<NavSample>& nav) const {
+  return sounding_footprint(nav, swaths_);
+}
+
 std::vector<Ping> PingOutlines::pings_without_beams() const {
   std::vector<Ping> pings;
   pings.reserve(swaths_.size());

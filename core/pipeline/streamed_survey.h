@@ -21,6 +21,7 @@ class PingOutlines : public PingSink {
   void ping(double time, std::span<const Beam> beams) override;
 
   SweptArea swept_area(const std::vector<NavSample>& nav) const;
+  SoundingFootprint footprint(const std::vector<NavSample>& nav) const;
   double sounding_reach_m() const { return reach_m_; }
   std::size_t pings() const { return swaths_.size(); }
   // The pings with their sounding counts but no beams to point at, as a survey summarized

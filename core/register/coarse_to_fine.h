@@ -62,9 +62,9 @@ struct CoarseToFineConfig {
     nested("matching", matching, field);
     nested("ransac", ransac, field);
     nested("gicp", gicp, field);
-    field("crop_margin_m", crop_margin_m, 0, 100);
+    field("crop_margin_m", crop_margin_m, 0, 1e5);
     nested("uniqueness", uniqueness, field);
-    field("feature_refine_correspondence_m", feature_refine_correspondence_m, 0, 100);
+    field("feature_refine_correspondence_m", feature_refine_correspondence_m, 0, 1e5);
   }
 };
 

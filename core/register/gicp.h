@@ -61,12 +61,12 @@ struct GicpConfig {  // Table 1 (c)
 
   template <typename Field>
   void fields(Field&& field) {
-    field("max_correspondence_m", max_correspondence_m, 0.01, 100);
+    field("max_correspondence_m", max_correspondence_m, 0.01, 1e5);
     field("max_iterations", max_iterations, 1, 10000);
     field("convergence", convergence, 1e-12, 1);
     field("neighbours", neighbours, 3, 200);
     field("about_centroid", about_centroid, 0, 1);
-    field("refine_correspondence_m", refine_correspondence_m, 0, 100);
+    field("refine_correspondence_m", refine_correspondence_m, 0, 1e5);
     field("refine_convergence", refine_convergence, 1e-12, 1);
     field("engine", engine, 0, 1);
     field("min_observed_share", min_observed_share, 0, 1);

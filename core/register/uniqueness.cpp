@@ -82,14 +82,14 @@ Cost cost_at(const TerrainGrid& target, const std::vector<Eigen::Vector3d>& move
 
 }  // namespace
 
-double Uniqueness::distinctness(double noise_floor_m2) const {
+double Uniqueness::distinctness() const {
   if (!probed) return 0.0;
-  return alternative_cost_m2 / std::max(cost_at_answer_m2, noise_floor_m2);
+  return alternative_cost_m2 / std::max(cost_at_answer_m2, misfit_floor_m2);
 }
 
-double Uniqueness::nearby_improvement(double noise_floor_m2) const {
+double Uniqueness::nearby_improvement() const {
   if (!probed) return 1.0;
-  return std::max(cost_at_answer_m2, noise_floor_m2) / std::max(nearby_cost_m2, noise_floor_m2);
+  return std::max(cost_at_answer_m2, misfit_floor_m2) / std::max(nearby_cost_m2, misfit_floor_m2);
 }
 
 bool Uniqueness::unique() const {
@@ -111,6 +111,7 @@ std::vector<Eigen::Vector2d> Uniqueness::competitor_offsets(bool open) const {
 Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source, const Eigen::Isometry3d& source_to_target,
                             const UniquenessConfig& config) {
   Uniqueness u;
+  u.misfit_floor_m2 = config.misfit_floor_m2;
   std::vector<Eigen::Vector3d> moved;
   for (int r = 0; r < source.rows(); ++r) {
     for (int c = 0; c < source.cols(); ++c) {
@@ -176,7 +177,7 @@ Uniqueness probe_uniqueness(const TerrainGrid& target, const TerrainGrid& source
   u.reach = reach;
   u.step_m = config.step_m;
   u.competitors.assign(cost.size(), false);
-  const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, kMisfitNoiseFloorM2);
+  const double competing = config.competitor_ratio * std::max(u.cost_at_answer_m2, u.misfit_floor_m2);
   for (int j = -reach; j <= reach; ++j) {
     for (int i = -reach; i <= reach; ++i) {
       const std::size_t k = static_cast<std::size_t>(j + reach) * side + (i + reach);

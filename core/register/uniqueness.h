@@ -30,20 +30,21 @@ struct UniquenessConfig {
   // (floored as in `distinctness`) competes with it (Uniqueness::competitors): the same ratio as
   // acceptance.min_distinctness, an RMS misfit under 5x the answer's.
   double competitor_ratio = 25.0;
+  // The misfit a perfect alignment still leaves, (2 cm)² at the lake's footprint: ratios of
+  // misfits are taken against at least this, so that sounding noise alone does not make an answer
+  // look unique.
+  double misfit_floor_m2 = 4e-4;
   template <typename Field>
   void fields(Field&& field) {
-    field("search_radius_m", search_radius_m, 1, 1000);
-    field("step_m", step_m, 0.1, 100);
-    field("exclusion_m", exclusion_m, 0, 1000);
+    field("search_radius_m", search_radius_m, 1, 1e5);
+    field("step_m", step_m, 0.1, 1e5);
+    field("exclusion_m", exclusion_m, 0, 1e5);
     field("min_overlap_share", min_overlap_share, 0.01, 1);
-    field("local_radius_m", local_radius_m, 0, 1000);
+    field("local_radius_m", local_radius_m, 0, 1e5);
     field("competitor_ratio", competitor_ratio, 1, 1e6);
+    field("misfit_floor_m2", misfit_floor_m2, 0, 1e6);
   }
 };
-
-// The misfit a perfect alignment still leaves, (2 cm)²: ratios of misfits are taken against at
-// least this, so that sounding noise alone does not make an answer look unique.
-inline constexpr double kMisfitNoiseFloorM2 = 4e-4;
 
 struct Uniqueness {
   bool probed = false;  // false: too little overlap to compare
@@ -57,14 +58,15 @@ struct Uniqueness {
   double nearby_cost_m2 = 0;
   Eigen::Vector2d nearby_offset_m = Eigen::Vector2d::Zero();
   Eigen::Vector2d alternative_offset_m = Eigen::Vector2d::Zero();
+  double misfit_floor_m2 = UniquenessConfig{}.misfit_floor_m2;  // the probe's
   // How much worse the best alternative fits than the answer: the ratio of their mean squared
-  // misfits, the answer's floored at `noise_floor_m2`. About 1 when another offset fits as well
+  // misfits, the answer's floored at `misfit_floor_m2`. About 1 when another offset fits as well
   // (a periodic or flat seabed); in the hundreds on textured ground, where only the answer
   // leaves nothing but sounding noise.
-  double distinctness(double noise_floor_m2 = kMisfitNoiseFloorM2) const;
+  double distinctness() const;
   // How many times better the best nearby offset fits than the answer (both floored at
-  // `noise_floor_m2`): about 1 at the bottom of the basin.
-  double nearby_improvement(double noise_floor_m2 = kMisfitNoiseFloorM2) const;
+  // `misfit_floor_m2`): about 1 at the bottom of the basin.
+  double nearby_improvement() const;
   // Every offset that competes with the answer (UniquenessConfig::competitor_ratio), as a mask
   // over the probe's square of (2·reach + 1)² offsets `step_m` apart, row by row from
   // (−reach, −reach): a bit each, so that a flat bottom, where every offset competes, costs

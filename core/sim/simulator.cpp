@@ -33,6 +33,11 @@ std::string survey_name(const SimulationConfig& config, double line_spacing_m) {
     std::snprintf(spacing, sizeof spacing, "-spacing%gm", line_spacing_m);
     name += spacing;
   }
+  if (config.altitude_m) {
+    char altitude[32];
+    std::snprintf(altitude, sizeof altitude, "-altitude%gm", *config.altitude_m);
+    name += altitude;
+  }
   return name;
 }
 
@@ -56,7 +61,7 @@ nlohmann::json drift_json(const SimulationConfig& config, const Simulation& sim)
   nlohmann::json json = {{"model", to_string(config.drift)}, {"seed", config.seed}};
   switch (config.drift) {
     case DriftModel::kPaper:
-      json["sigma_translation_m"] = config.paper_drift.sigma_translation_m;
+      json["sigma_translation_m"] = sim.sigma_translation_m;
       json["sigma_yaw_rad"] = sim.sigma_yaw_rad;
       break;
     case DriftModel::kDvl: json.update(dvl_json(config.dvl_drift)); break;
@@ -77,14 +82,45 @@ nlohmann::json drift_json(const SimulationConfig& config, const Simulation& sim)
 }
 
 // Dead reckoning from the truth by the configured model; records what the model drew.
+// The scenario's sonar height: its mean depth less the vehicle's.
+double default_altitude_m(const SimulationConfig& config) {
+  return config.terrain.mean_depth_m - config.motion.vehicle_depth_m;
+}
+
+double world_scale(const SimulationConfig& config) {
+  return config.altitude_m ? *config.altitude_m / default_altitude_m(config) : 1.0;
+}
+
+// The sonar flown at the configured altitude: its range stretched with the world, its pings no
+// faster than their echoes.
+SonarConfig sonar_of(const SimulationConfig& config) {
+  SonarConfig sonar = config.sonar;
+  if (!config.altitude_m) return sonar;
+  sonar.max_range_m *= world_scale(config);
+  const double fastest_hz = echo_limited_ping_rate_hz(*config.altitude_m, sonar.swath_deg);
+  if (fastest_hz < sonar.ping_rate_hz) {
+    // Pings fall on the simulation's steps: the interval is a whole number of them.
+    const double step_s = config.motion.step_s;
+    sonar.ping_rate_hz = 1 / (step_s * std::ceil(1 / (fastest_hz * step_s) - 1e-9));
+  }
+  return sonar;
+}
+
+// `scale` and `steps_scale`: how much larger the world and how many more submap steps than
+// the scenario's at its own altitude. The paper's per-step noise is then shrunk so that the drift
+// at the end is `scale` times the scenario's: the same error for the survey's size.
 std::vector<NavSample> dead_reckoning(const SimulationConfig& config,
                                       const std::vector<NavSample>& truth, double first_ping_time,
-                                      Simulation& sim) {
+                                      double scale, double steps_scale, Simulation& sim) {
   switch (config.drift) {
     case DriftModel::kPaper: {
       PaperDrift drift = config.paper_drift;
       if (drift.sigma_yaw_rad <= 0) drift.sigma_yaw_rad = calibrated_paper_sigma_yaw();
+      drift.sigma_yaw_rad /= std::sqrt(steps_scale);
+      drift.sigma_translation_m *= scale / std::sqrt(steps_scale);
+      drift.submap_duration_s *= config.sonar.ping_rate_hz / sonar_of(config).ping_rate_hz;
       sim.sigma_yaw_rad = drift.sigma_yaw_rad;
+      sim.sigma_translation_m = drift.sigma_translation_m;
       return apply_paper_drift(truth, first_ping_time, drift, config.seed);
     }
     case DriftModel::kDvl: return apply_dvl_drift(truth, config.dvl_drift, config.seed);
@@ -117,21 +153,31 @@ std::string to_string(DriftModel model) {
   return "?";
 }
 
+double echo_limited_ping_rate_hz(double altitude_m, double swath_deg) {
+  const double slant_range_m = altitude_m / std::cos(swath_deg / 2 * M_PI / 180);
+  return 1500.0 / (2 * slant_range_m);
+}
+
 Simulation simulate(const SimulationConfig& config) {
   MotionConfig motion = config.motion;
   motion.seed = config.seed;
   TerrainConfig terrain_config = config.terrain;
   terrain_config.seed = config.seed;
+  const double k = world_scale(config);
+  const SonarConfig sonar = sonar_of(config);
+  motion.vehicle_depth_m *= k;
+  motion.run_in_m *= k;
 
   const double line_spacing_m =
       config.line_spacing_m.value_or(default_line_spacing_m(config.scenario));
-  motion.turn_radius_m = lawnmower_turn_radius_m(line_spacing_m);
-  const std::vector<LineSpec> lines = survey_pattern(config.scenario, line_spacing_m);
+  motion.turn_radius_m = k * lawnmower_turn_radius_m(line_spacing_m);
+  std::vector<LineSpec> lines = survey_pattern(config.scenario, line_spacing_m);
+  for (LineSpec& line : lines) line = {k * line.start, k * line.end};
   const std::vector<VehicleState> states = drive(lines, motion);
   // Half a swath either side of the lines, plus room for turns.
-  const double margin = 40.0 + 2.0 * terrain_config.mean_depth_m;
+  const double margin = k * (40.0 + 2.0 * terrain_config.mean_depth_m);
   Simulation sim;
-  sim.terrain = Terrain::generate(terrain_config, pattern_area(lines, margin));
+  sim.terrain = Terrain::generate(terrain_config, pattern_area(lines, margin), k);
 
   Survey& survey = sim.survey;
   survey.metadata.name = survey_name(config, line_spacing_m);
@@ -140,7 +186,7 @@ Simulation simulate(const SimulationConfig& config) {
   // Navigation at its rate from the first step; pings at theirs, offset by one step so ping
   // times fall between navigation samples and the sync stage really interpolates.
   const std::size_t nav_stride = steps_per(1.0 / config.nav_rate_hz, motion.step_s);
-  const std::size_t ping_stride = steps_per(1.0 / config.sonar.ping_rate_hz, motion.step_s);
+  const std::size_t ping_stride = steps_per(1.0 / sonar.ping_rate_hz, motion.step_s);
   const std::size_t lead = steps_per(kNavLeadS, motion.step_s);
   std::vector<NavSample> truth =
       navigation_of(states, nav_stride, config.origin_easting, config.origin_northing);
@@ -155,7 +201,7 @@ Simulation simulate(const SimulationConfig& config) {
     auto rng = make_rng(config.seed, kSonarNoiseStream, k);
     const Eigen::Isometry3d pose = vehicle_pose(
         {v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg}, LocalOrigin{});
-    beams_per_ping[k] = ping(sim.terrain, pose, config.sonar, rng);
+    beams_per_ping[k] = ping(sim.terrain, pose, sonar, rng);
   }
   std::size_t total = 0;
   for (const auto& b : beams_per_ping) total += b.size();
@@ -167,11 +213,12 @@ Simulation simulate(const SimulationConfig& config) {
     std::vector<Beam>().swap(beams_per_ping[k]);
   }
 
-  survey.nav = dead_reckoning(config, truth, survey.pings.front().time, sim);
+  const double steps_scale = k * sonar.ping_rate_hz / config.sonar.ping_rate_hz;
+  survey.nav = dead_reckoning(config, truth, survey.pings.front().time, k, steps_scale, sim);
   sim.drift = drift_stats(survey.nav, truth);
   survey.reference_nav = std::move(truth);
 
-  const SonarConfig& s = config.sonar;
+  const SonarConfig& s = sonar;
   survey.metadata.sonar = {{"model", "simulated multibeam"},
                            {"beams", s.beams},
                            {"swath_deg", s.swath_deg},
@@ -192,6 +239,7 @@ Simulation simulate(const SimulationConfig& config) {
     simulation["line_spacing_m"] = line_spacing_m;
     simulation["turn_radius_m"] = motion.turn_radius_m;
   }
+  if (config.altitude_m) simulation["altitude_m"] = *config.altitude_m;
   return sim;
 }
 

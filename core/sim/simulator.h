@@ -26,6 +26,12 @@ struct SimulationConfig {
   CompassStepDrift compass_step_drift;
   TerrainConfig terrain;  // its seed is replaced by `seed`
   std::optional<double> line_spacing_m;  // the scenario's when unset
+  // The sonar's height above the mean seabed; the scenario's (9 m) when unset. The whole world
+  // scales with it (the seabed in every direction, the lines, the turns, the sonar's range and
+  // the paper drift's error), as a survey of the same site flown higher would see a larger one;
+  // the vehicle keeps its speed and the sonar its fan, pinging as fast as the outer beams' echoes
+  // come back (at most its ping rate).
+  std::optional<double> altitude_m;
   MotionConfig motion;    // its seed is replaced by `seed`
   SonarConfig sonar;
   double nav_rate_hz = 20.0;
@@ -38,10 +44,15 @@ struct Simulation {
   Survey survey;  // nav = dead reckoning, reference_nav = truth
   Terrain terrain;
   double sigma_yaw_rad = 0;  // the paper model's sigma_yaw used (0 for the others)
+  double sigma_translation_m = 0;  // and its sigma_translation
   std::optional<HeadingStep> compass_step;  // the compass-step model's fault
   DriftStats drift;
 };
 
 Simulation simulate(const SimulationConfig& config);
+
+// The fastest a sonar can ping when the echo of its outermost beam must be back first: two slant
+// ranges at 1500 m/s.
+double echo_limited_ping_rate_hz(double altitude_m, double swath_deg);
 
 }  // namespace bathyslam::sim

@@ -88,9 +88,10 @@ std::string to_string(TerrainKind kind) {
   return "?";
 }
 
-Terrain Terrain::generate(const TerrainConfig& config, const Area& area) {
+Terrain Terrain::generate(const TerrainConfig& config, const Area& area, double scale) {
   Terrain t;
-  t.area_ = {area.min.array() - kMarginM, area.max.array() + kMarginM};
+  t.scale_ = scale;
+  t.area_ = {area.min.array() / scale - kMarginM, area.max.array() / scale + kMarginM};
   t.cell_m_ = config.cell_m;
   t.cols_ = static_cast<int>(std::ceil((t.area_.max.x() - t.area_.min.x()) / t.cell_m_)) + 1;
   t.rows_ = static_cast<int>(std::ceil((t.area_.max.y() - t.area_.min.y()) / t.cell_m_)) + 1;
@@ -104,7 +105,7 @@ Terrain Terrain::generate(const TerrainConfig& config, const Area& area) {
   if (config.kind == TerrainKind::kLake) {
     t.sample_lake(config);
   } else {
-    t.sample_seabed(config, area);
+    t.sample_seabed(config, {area.min / scale, area.max / scale});
   }
   t.max_slope_ = t.steepest_slope();
   return t;
@@ -197,8 +198,8 @@ double Terrain::sample(const std::vector<float>& grid, double x, double y) const
          fv * ((1 - fu) * row[cols_] + fu * row[cols_ + 1]);
 }
 
-double Terrain::elevation(double x, double y) const { return sample(elevation_, x, y); }
+double Terrain::elevation(double x, double y) const { return scale_ * sample(elevation_, x / scale_, y / scale_); }
 
-double Terrain::roughness_weight(double x, double y) const { return sample(roughness_, x, y); }
+double Terrain::roughness_weight(double x, double y) const { return sample(roughness_, x / scale_, y / scale_); }
 
 }  // namespace bathyslam::sim

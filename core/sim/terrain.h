@@ -93,7 +93,9 @@ struct Area {
 class Terrain {
  public:
   // Samples the terrain over `area` (and a little beyond, so rays near the edge still land).
-  static Terrain generate(const TerrainConfig& config, const Area& area);
+  // `scale` makes the same seabed `scale` times larger in every direction, depth included: the
+  // terrain of `config` over area / scale, stretched (a survey flown `scale` times higher).
+  static Terrain generate(const TerrainConfig& config, const Area& area, double scale = 1);
 
   // Elevation (metres, negative below the datum) at a map-frame position, bilinear between
   // grid samples; clamps outside the sampled area.
@@ -103,7 +105,7 @@ class Terrain {
   double roughness_weight(double x, double y) const;
   // Largest surface slope (rise over run) anywhere; ray marching uses it as a safe step bound.
   double max_slope() const { return max_slope_; }
-  const Area& area() const { return area_; }
+  Area area() const { return {scale_ * area_.min, scale_ * area_.max}; }
 
  private:
   void sample_lake(const TerrainConfig& config);
@@ -118,6 +120,7 @@ class Terrain {
   std::vector<float> elevation_;
   std::vector<float> roughness_;
   double max_slope_ = 1.0;
+  double scale_ = 1;  // map frame over the sampled grid's frame, horizontally and vertically
 };
 
 }  // namespace bathyslam::sim

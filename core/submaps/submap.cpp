@@ -38,6 +38,7 @@ void SubmapBuilder::add_ping(double time, std::span<const Beam> beams) {
     ++set_.pings_dropped;
     return;
   }
+  swaths_.push_back(ping_swath(time, beams));
   pending_.push_back({time, vehicle_pose(*nav, set_.origin), pending_beams_.size(), beams.size()});
   pending_beams_.insert(pending_beams_.end(), beams.begin(), beams.end());
   if (pending_.size() == static_cast<std::size_t>(config_.pings_per_submap)) close_submap();
@@ -45,6 +46,7 @@ void SubmapBuilder::add_ping(double time, std::span<const Beam> beams) {
 
 SubmapSet SubmapBuilder::finish() {
   if (!pending_.empty()) close_submap();
+  set_.footprint = sounding_footprint(nav_, swaths_);
   return std::move(set_);
 }
 

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "core/lines/survey_lines.h"
+#include "core/submaps/sounding_footprint.h"
 #include "core/types/pose.h"
 #include "core/types/survey.h"
 
@@ -43,6 +44,7 @@ struct SubmapSet {
   std::vector<SurveyLine> lines;
   std::vector<Submap> submaps;
   std::size_t pings_dropped = 0;   // outside the navigation's time span (sync)
+  SoundingFootprint footprint;     // of every ping given to the builder; 0 for submaps made by hand
 };
 
 // The map frame's origin for a survey: its first navigation sample, rounded to 100 m.
@@ -71,6 +73,7 @@ class SubmapBuilder {
   SubmapSet set_;
   std::vector<PendingPing> pending_;  // posed pings of the submap being gathered
   std::vector<Beam> pending_beams_;
+  std::vector<PingSwath> swaths_;  // every ping's, for the footprint
 };
 
 SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config = {});

@@ -96,6 +96,10 @@ nlohmann::json to_json(const SurveySummary& s) {
       {"line_count", s.lines.size()},
       {"lines", lines},
       {"drift", nullptr}};
+  if (s.footprint) {
+    j["footprint"] = {{"spacing_m", s.footprint->measured.spacing_m}, {"altitude_m", s.footprint->measured.altitude_m},
+                      {"scale", s.footprint->scale}};
+  }
   if (s.drift) {
     j["drift"] = {{"end_m", s.drift->end_m}, {"mean_m", s.drift->mean_m}, {"rms_m", s.drift->rms_m},
                   {"max_m", s.drift->max_m}, {"percent_of_distance", s.drift->percent_of_distance}};
@@ -116,6 +120,10 @@ std::string to_text(const SurveySummary& s) {
                 s.northing_max - s.northing_min);
   out += format("vehicle     depth %.2f .. %.2f m, %.0f m travelled\n", s.vehicle_depth_min_m,
                 s.vehicle_depth_max_m, s.distance_m);
+  if (s.footprint) {
+    out += format("footprint   soundings %.3g m apart, %.3g m below the sonar: the SLAM core's lengths x %g\n",
+                  s.footprint->measured.spacing_m, s.footprint->measured.altitude_m, s.footprint->scale);
+  }
   out += format("lines       %zu\n", s.lines.size());
   for (std::size_t i = 0; i < s.lines.size(); ++i) {
     out += format("  line %-3zu  course %5.1f deg, %7.1f m\n", i + 1, s.lines[i].course_deg,

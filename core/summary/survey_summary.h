@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/lines/survey_lines.h"
+#include "core/submaps/sounding_footprint.h"
 #include "core/types/survey.h"
 
 namespace bathyslam {
@@ -35,6 +36,14 @@ struct SurveySummary {
     double percent_of_distance = 0;  // end error over distance travelled
   };
   std::optional<Drift> drift;
+
+  // How densely the soundings lie and how many times Table 1's lengths the SLAM core will use
+  // for them (pipeline/parameters.h, footprint_scale); set by whoever measured the pings.
+  struct Footprint {
+    SoundingFootprint measured;
+    double scale = 1;
+  };
+  std::optional<Footprint> footprint;
 };
 
 SurveySummary summarize(const Survey& survey);

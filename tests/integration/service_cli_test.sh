@@ -100,6 +100,13 @@ cmp "$work/corrected.gsf" "$work/process/corrected.gsf" || fail "the job's corre
 "$BATHYSLAM" upload "$GSF_DATA/EX1811_EM302_0059_20181102_212138.gsf" --name real-gsf \
   > "$work/gsf1" 2> "$work/gsf1.err" || fail "GSF upload: $(cat "$work/gsf1.err")"
 grep -Eq "^survey [0-9]+ ready$" "$work/gsf1" || fail "$(cat "$work/gsf1")"
+# A real file has no reference navigation and one submap: the report says what it could not
+# compute and why, not a zero error.
+real_job=$("$BATHYSLAM" submit "$(awk '/^survey .* ready$/ {print $2}' "$work/gsf1")" --config odometry | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$real_job" > "$work/real_watch" 2> /dev/null || fail "watch: $(cat "$work/real_watch")"
+"$BATHYSLAM" report "$real_job" > "$work/real_report" || fail "report of the real GSF job"
+grep -q "^trajectory  *not computed: no reference navigation$" "$work/real_report" || fail "$(cat "$work/real_report")"
+grep -q "^consistency  *not computed: no map cell seen by two survey lines" "$work/real_report" || fail "$(cat "$work/real_report")"
 head -c 5000 "$GSF_DATA/gsfpy_test_data.gsf" > "$work/cut.gsf"
 if "$BATHYSLAM" upload "$work/cut.gsf" 2> "$work/cut.err"; then fail "a truncated GSF file was accepted"; fi
 grep -q "cut.gsf: record 7 at byte 4000: truncated" "$work/cut.err" || fail "$(cat "$work/cut.err")"

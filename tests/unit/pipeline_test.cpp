@@ -408,5 +408,32 @@ TEST(Pipeline, CancellationStopsItDuringRegistration) {
   EXPECT_EQ(stages.back(), "register");
 }
 
+// A survey without reference navigation, and one whose lines never overlap, has no trajectory
+// error or no consistency error: the report says so and why, rather than zeros a user would read
+// as a perfect result.
+TEST(Report, SaysWhatWasNotComputedAndWhy) {
+  Survey survey = small_survey();
+  survey.reference_nav.reset();
+  // The first 400 pings: the run-in and part of the first line, which nothing overlaps.
+  survey.pings.resize(400);
+  survey.beams.resize(survey.pings.back().first_beam + survey.pings.back().beam_count);
+  const PipelineResult r = run_pipeline(survey, preset_config(Configuration::kOdometry));
+
+  const nlohmann::json j = report_json(r);
+  const nlohmann::json& trajectory = j.at("trajectory_error_m");
+  EXPECT_TRUE(trajectory.at("optimized").is_null());
+  EXPECT_TRUE(trajectory.at("dead_reckoning").is_null());
+  EXPECT_EQ(trajectory.at("not_computed"), "no reference navigation");
+  const nlohmann::json& consistency = j.at("consistency_error_m");
+  EXPECT_TRUE(consistency.at("optimized").is_null());
+  EXPECT_NE(consistency.at("not_computed").get<std::string>().find("no map cell seen by two survey lines"), std::string::npos);
+  EXPECT_EQ(report_summary_from_json(j).trajectory.count, 0u);  // read back as nothing, not refused
+
+  const std::string text = report_text(r);
+  EXPECT_NE(text.find("trajectory error   not computed: no reference navigation"), std::string::npos) << text;
+  EXPECT_NE(text.find("consistency error  not computed: no map cell seen by two survey lines"), std::string::npos) << text;
+  EXPECT_EQ(text.find("rmse 0.00"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace bathyslam
