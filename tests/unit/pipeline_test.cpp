@@ -408,6 +408,37 @@ TEST(Pipeline, CancellationStopsItDuringRegistration) {
   EXPECT_EQ(stages.back(), "register");
 }
 
+// The same survey in a world four times larger (positions, depths and soundings, as if flown four
+// times higher over a seabed four times larger) is the same problem in other units: its lengths
+// scale by the measured footprint, and mchs decides as it does at the lake's scale.
+TEST(Footprint, MchsDecidesAtFourTimesTheScaleAsAtTheLakes) {
+  Survey larger = small_survey();
+  const NavSample first = larger.nav.front();
+  auto scaled = [&](std::vector<NavSample>& nav) {
+    for (NavSample& n : nav) {
+      n.easting = first.easting + 4 * (n.easting - first.easting);
+      n.northing = first.northing + 4 * (n.northing - first.northing);
+      n.depth_m *= 4;
+    }
+  };
+  scaled(larger.nav);
+  scaled(*larger.reference_nav);
+  for (Beam& b : larger.beams) {
+    b.along *= 4;
+    b.across *= 4;
+    b.down *= 4;
+  }
+  const PipelineResult lake = run(Configuration::kMchs);
+  const PipelineResult r = run_pipeline(larger, preset_config(Configuration::kMchs));
+  EXPECT_EQ(r.footprint_scale, 4);
+  EXPECT_DOUBLE_EQ(r.config.grid.cell_m, 2.0);
+  const Counts at_lake = count(lake), at_four = count(r);
+  EXPECT_NEAR(at_four.adjacent + at_four.loop, at_lake.adjacent + at_lake.loop, 0.1 * (at_lake.adjacent + at_lake.loop));
+  EXPECT_NEAR(rmse(r.trajectory_errors) / 4, rmse(lake.trajectory_errors), 0.25 * rmse(lake.trajectory_errors));
+  EXPECT_LT(rmse(r.trajectory_errors), 0.5 * rmse(r.dr_trajectory_errors));
+  EXPECT_FALSE(r.safety_net.fell_back);
+}
+
 // A survey without reference navigation, and one whose lines never overlap, has no trajectory
 // error or no consistency error: the report says so and why, rather than zeros a user would read
 // as a perfect result.

@@ -140,5 +140,32 @@ TEST(Simulator, RecordsTerrainSpacingAndCompassFault) {
   EXPECT_GE(std::abs(simulation["drift"]["compass_step"]["step_deg"].get<double>()), 3.0);
 }
 
+// A survey flown higher sees the same seabed scaled with it: the world (seabed, lines, range)
+// grows by altitude / 9 m, the pings come no faster than their echoes, and the paper drift's
+// error grows with the world. 16 beams: the geometry is what is tested here.
+TEST(Simulator, AHigherSurveySeesTheSameSeabedScaledWithIt) {
+  SimulationConfig config;
+  config.sonar.beams = 16;
+  config.terrain.kind = TerrainKind::kBoulders;
+  const Simulation low = simulate(config);
+  config.altitude_m = 36.0;  // four times the default 9 m
+  const Simulation high = simulate(config);
+  EXPECT_EQ(high.survey.metadata.name, "small-seed1-paper-boulders-altitude36m");
+  EXPECT_EQ(high.survey.metadata.vehicle["simulation"]["altitude_m"], 36.0);
+  for (const Eigen::Vector2d p : {Eigen::Vector2d(30, 7), Eigen::Vector2d(101.3, -12.9), Eigen::Vector2d(250, 40)}) {
+    EXPECT_NEAR(high.terrain.elevation(4 * p.x(), 4 * p.y()), 4 * low.terrain.elevation(p.x(), p.y()), 1e-3);
+  }
+  // 36 m below a 140 degree fan: echoes from 105 m slant range, 7.1 Hz, on the 25 ms steps: 6.67 Hz.
+  EXPECT_NEAR(echo_limited_ping_rate_hz(36, 140), 7.13, 0.01);
+  EXPECT_NEAR(high.survey.metadata.sonar["ping_rate_hz"].get<double>(), 1 / 0.15, 1e-9);
+  const double seconds = [](const Survey& s) { return s.pings.back().time - s.pings.front().time; }(high.survey);
+  EXPECT_NEAR(seconds / (low.survey.pings.back().time - low.survey.pings.front().time), 4, 0.2) << "same speed, 4x the lines";
+  std::vector<float> down;
+  for (const Beam& b : high.survey.beams) down.push_back(b.down);
+  std::nth_element(down.begin(), down.begin() + down.size() / 2, down.end());
+  EXPECT_NEAR(down[down.size() / 2], 36, 1) << "the seabed 36 m below the sonar";
+  EXPECT_GT(high.drift.mean_m, 2 * low.drift.mean_m);
+}
+
 }  // namespace
 }  // namespace bathyslam::sim
