@@ -103,6 +103,7 @@ int main(int argc, char** argv) try {
   }
   const Survey survey = load_bundle(argv[1]);
   const SubmapSet set = build_submaps(survey, config.submaps);
+  config = scaled_to_footprint(config, footprint_scale(set.footprint, config));  // as the pipeline's lengths
   std::vector<Eigen::Isometry3d> dr, reference;
   for (const Submap& s : set.submaps) {
     if (!s.reference_pose) throw std::runtime_error(std::string(argv[1]) + ": no reference_nav.csv");

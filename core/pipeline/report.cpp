@@ -216,6 +216,12 @@ ReportSummary report_summary_from_json(const nlohmann::json& j) {
 
 namespace {
 
+std::size_t soundings_of(const SubmapSet& set) {
+  std::size_t n = 0;
+  for (const Submap& s : set.submaps) n += s.points.size();
+  return n;
+}
+
 nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
   return {{"estimated", e.estimated},
           {"innovations", e.innovations},
@@ -252,6 +258,7 @@ nlohmann::json report_json(const PipelineResult& r) {
                          {"scale", r.footprint_scale}}},
           {"parameters", parameters(r.config)},
           {"submaps", {{"count", r.submaps.submaps.size()},
+                       {"soundings", soundings_of(r.submaps)},
                        {"lines", r.submaps.lines.size()},
                        {"pings_dropped_outside_navigation", r.submaps.pings_dropped}}},
           {"constraints", {{"by_type", counts_json(s.by_type)}, {"by_path", counts_json(s.by_path)},
