@@ -135,9 +135,7 @@ int length_power(std::string_view name) {
 }  // namespace
 
 double footprint_scale(const SoundingFootprint& footprint, const PipelineConfig& config) {
-  if (config.footprint.scale > 0) return config.footprint.scale;
-  if (footprint.spacing_m <= 0) return 1;
-  return std::exp2(std::round(std::log2(footprint.spacing_m / kPaperSpacingM)));
+  return config.footprint.scale > 0 ? config.footprint.scale : length_scale(footprint);
 }
 
 PipelineConfig scaled_to_footprint(const PipelineConfig& config, double scale) {

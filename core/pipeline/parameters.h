@@ -23,7 +23,7 @@ void set_parameter(PipelineConfig& config, std::string_view assignment);
 std::map<std::string, double> parameters(const PipelineConfig& config);
 
 // How many times Table 1's lengths a survey of this footprint needs: `config.footprint.scale`
-// when set, else the power of two nearest its spacing over kPaperSpacingM (1 without soundings).
+// when set, else length_scale (sounding_footprint.h).
 double footprint_scale(const SoundingFootprint& footprint, const PipelineConfig& config);
 // `config` with every length (a parameter named *_m, the best sigmas of quality) still at its
 // preset's value times `scale`, every area (*_m2) times its square. A length set to any other

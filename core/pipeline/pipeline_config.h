@@ -25,10 +25,6 @@ namespace bathyslam {
 
 enum class Configuration { kOdometry, kGicp, kMchs };
 
-// The sounding spacing (footprint.h) of the survey Table 1's lengths are for: 512 beams over 140°
-// from 9 m above the bed (0.1 m apart across track on average) at 2 m/s and 10 pings a second
-// (0.2 m along), as the paper's lake and our `lake` scenario.
-inline constexpr double kPaperSpacingM = 0.14;
 // The names, in one place: the CLI's choices, the service's check and the report use these.
 inline constexpr std::array<const char*, 3> kConfigurationNames{"odometry", "gicp", "mchs"};
 Configuration parse_configuration(const std::string& name);  // throws std::invalid_argument
@@ -158,9 +154,8 @@ struct PipelineConfig {
   // grid cell, a voxel or a correspondence distance holds as many soundings at 80 m altitude or in
   // 2 km of water as in the lake.
   struct FootprintScale {
-    // 0: measured, the power of two nearest the survey's sounding spacing over kPaperSpacingM (an
-    // octave: the lake's spacing varies by a few percent between surveys and keeps Table 1 exact);
-    // 1: Table 1's lengths as they are.
+    // 0: measured (length_scale, sounding_footprint.h: the power of two nearest the survey's
+    // sounding spacing over kPaperSpacingM); 1: Table 1's lengths as they are.
     double scale = 0;
     template <typename Field>
     void fields(Field&& field) {

@@ -96,4 +96,9 @@ SoundingFootprint sounding_footprint(const std::vector<NavSample>& nav, const st
 
 SoundingFootprint sounding_footprint(const Survey& survey) { return sounding_footprint(survey.nav, ping_swaths(survey)); }
 
+double length_scale(const SoundingFootprint& footprint) {
+  if (footprint.spacing_m <= 0) return 1;
+  return std::exp2(std::round(std::log2(footprint.spacing_m / kPaperSpacingM)));
+}
+
 }  // namespace bathyslam

@@ -33,6 +33,28 @@ TEST(SoundingFootprint, IsTheAreaPerSoundingAndTheMedianHeight) {
   EXPECT_EQ(build_submaps(Survey{}).footprint.spacing_m, 0);
 }
 
+// A ship's line 20 km long, soundings ~18 m apart (a footprint 128 times the lake's), its
+// navigation stepping 1.5 m sideways every 400 m as a dead-reckoned track does between fixes: one
+// line. With the lake's 10 m course window every step would read as a turn and split it.
+TEST(SoundingFootprint, LinesFollowItToo) {
+  Survey survey;
+  for (int i = 0; i <= 2000; ++i) {
+    survey.nav.push_back({.time = 6.0 * i, .easting = 10.0 * i, .northing = 1.5 * (i / 40), .heading_deg = 90});
+  }
+  for (int i = 0; i < 2000; ++i) {
+    survey.pings.push_back({6.0 * i + 3, static_cast<uint32_t>(survey.beams.size()), 101});
+    for (int b = 0; b <= 100; ++b) {
+      survey.beams.push_back({static_cast<uint32_t>(b), 0, static_cast<float>(3200 * (b / 100.0 - 0.5)), 1500});
+    }
+  }
+  const SubmapSet set = build_submaps(survey);
+  EXPECT_EQ(length_scale(set.footprint), 128);
+  EXPECT_GT(split_lines(survey.nav).size(), 10u) << "the lake's window sees turns";
+  ASSERT_EQ(set.lines.size(), 1u);
+  // The ends lie within a course window of the track's ends, where no course is known.
+  for (std::size_t i = 1; i + 1 < set.submaps.size(); ++i) EXPECT_EQ(set.submaps[i].line, 0) << i;
+}
+
 TEST(FootprintScale, IsThePowerOfTwoNearestTheSpacingOverThePapers) {
   const PipelineConfig measured;
   EXPECT_EQ(footprint_scale({.spacing_m = kPaperSpacingM * 1.3}, measured), 1);  // the lake's varies by a few percent
