@@ -30,8 +30,9 @@ void inspect_bundle(const std::string& bundle, bool json) {
     else std::fprintf(stderr, "%s/%s\n", bundle.c_str(), p.to_string().c_str());
   }
   if (!result.survey) throw std::runtime_error(bundle + ": not a valid survey bundle");
-  SurveySummary summary = summarize(*result.survey);
-  summary.footprint = footprint_of(sounding_footprint(*result.survey));
+  const SoundingFootprint footprint = sounding_footprint(*result.survey);
+  SurveySummary summary = summarize(*result.survey, line_config_for(footprint));
+  summary.footprint = footprint_of(footprint);
   if (json) std::printf("%s\n", to_json(summary).dump(2).c_str());
   else std::printf("%s", to_text(summary).c_str());
 }
@@ -43,8 +44,9 @@ void inspect_gsf(const InspectOptions& o) {
   PingOutlines outlines;
   LoadedSurvey loaded = load_survey(o.survey.input(), outlines);
   loaded.survey.pings = outlines.pings_without_beams();
-  SurveySummary summary = summarize(loaded.survey);
-  summary.footprint = footprint_of(outlines.footprint(loaded.survey.nav));
+  const SoundingFootprint footprint = outlines.footprint(loaded.survey.nav);
+  SurveySummary summary = summarize(loaded.survey, line_config_for(footprint));
+  summary.footprint = footprint_of(footprint);
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();
     for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));

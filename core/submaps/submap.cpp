@@ -47,14 +47,8 @@ void SubmapBuilder::add_ping(double time, std::span<const Beam> beams) {
 SubmapSet SubmapBuilder::finish() {
   if (!pending_.empty()) close_submap();
   set_.footprint = sounding_footprint(nav_, swaths_);
-  // The lines' course window and shortest line are the lake's; a survey flown higher turns wider
-  // and its navigation wanders further within a window, so they follow the footprint like the
-  // core's lengths (at 1500 m, a 10 m window split six lines into 71).
-  if (const double scale = length_scale(set_.footprint); scale != 1) {
-    LineConfig lines;
-    lines.course_window_m *= scale;
-    lines.min_length_m *= scale;
-    set_.lines = split_lines(nav_, lines);
+  if (length_scale(set_.footprint) != 1) {  // split at the lake's scale until the footprint was known
+    set_.lines = split_lines(nav_, line_config_for(set_.footprint));
     for (Submap& submap : set_.submaps) submap.line = line_at(set_.lines, nav_, submap.time_mid);
   }
   return std::move(set_);
@@ -90,6 +84,13 @@ void SubmapBuilder::close_submap() {
   set_.submaps.push_back(std::move(submap));
   pending_.clear();
   pending_beams_.clear();
+}
+
+LineConfig line_config_for(const SoundingFootprint& footprint) {
+  LineConfig lines;
+  lines.course_window_m *= length_scale(footprint);
+  lines.min_length_m *= length_scale(footprint);
+  return lines;
 }
 
 SubmapSet build_submaps(const Survey& survey, const SubmapConfig& config) {

@@ -47,6 +47,12 @@ struct SubmapSet {
   SoundingFootprint footprint;     // of every ping given to the builder; 0 for submaps made by hand
 };
 
+// How to split a survey of this footprint into lines: the lake's course window and shortest line
+// scaled as the core's lengths are (length_scale), since a survey flown higher turns wider and its
+// navigation wanders further within a window (at 1500 m, the lake's 10 m window split six lines
+// into 71).
+LineConfig line_config_for(const SoundingFootprint& footprint);
+
 // The map frame's origin for a survey: its first navigation sample, rounded to 100 m.
 LocalOrigin local_origin_of(const Survey& survey);
 

@@ -40,7 +40,7 @@ std::string format(const char* fmt, auto... args) {
 
 }  // namespace
 
-SurveySummary summarize(const Survey& survey) {
+SurveySummary summarize(const Survey& survey, const LineConfig& lines) {
   SurveySummary s;
   s.name = survey.metadata.name;
   s.crs = survey.metadata.crs;
@@ -73,7 +73,7 @@ SurveySummary summarize(const Survey& survey) {
     s.time_begin = std::min(s.time_begin, survey.pings.front().time);
     s.time_end = std::max(s.time_end, survey.pings.back().time);
   }
-  s.lines = split_lines(survey.nav);
+  s.lines = split_lines(survey.nav, lines);
   if (survey.reference_nav) s.drift = drift_against(survey.nav, *survey.reference_nav, s.distance_m);
   return s;
 }

@@ -46,7 +46,9 @@ struct SurveySummary {
   std::optional<Footprint> footprint;
 };
 
-SurveySummary summarize(const Survey& survey);
+// `lines`: how to split the navigation into lines (line_config_for the survey's footprint, as the
+// pipeline does).
+SurveySummary summarize(const Survey& survey, const LineConfig& lines = {});
 nlohmann::json to_json(const SurveySummary& summary);
 std::string to_text(const SurveySummary& summary);
 

@@ -243,7 +243,10 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     storage::Validation validation{!errors, problems, nullptr};
     if (!errors && bundle.survey) {
       bundle.survey->pings = outlines.pings_without_beams();
-      validation.summary = to_json(summarize(*bundle.survey));
+      const SoundingFootprint footprint = outlines.footprint(bundle.survey->nav);
+      SurveySummary summary = summarize(*bundle.survey, line_config_for(footprint));
+      summary.footprint = SurveySummary::Footprint{footprint, length_scale(footprint)};
+      validation.summary = to_json(summary);
     }
     if (!context_.surveys.save_validation_if_unchanged(survey.id, validation, uploads))
       throw Refusal(grpc::StatusCode::ABORTED, "survey " + std::to_string(survey.id) +
