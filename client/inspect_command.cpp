@@ -7,7 +7,6 @@
 #include "client/survey_options.h"
 #include "core/io/bundle.h"
 #include "core/io/survey_input.h"
-#include "core/pipeline/parameters.h"
 #include "core/pipeline/streamed_survey.h"
 #include "core/summary/survey_summary.h"
 
@@ -19,10 +18,6 @@ struct InspectOptions {
   bool json = false;
 };
 
-SurveySummary::Footprint footprint_of(const SoundingFootprint& measured) {
-  return {measured, footprint_scale(measured, PipelineConfig{})};
-}
-
 void inspect_bundle(const std::string& bundle, bool json) {
   BundleReadResult result = read_bundle(bundle);
   for (const Problem& p : result.problems) {
@@ -30,9 +25,7 @@ void inspect_bundle(const std::string& bundle, bool json) {
     else std::fprintf(stderr, "%s/%s\n", bundle.c_str(), p.to_string().c_str());
   }
   if (!result.survey) throw std::runtime_error(bundle + ": not a valid survey bundle");
-  const SoundingFootprint footprint = sounding_footprint(*result.survey);
-  SurveySummary summary = summarize(*result.survey, line_config_for(footprint));
-  summary.footprint = footprint_of(footprint);
+  const SurveySummary summary = summarize(*result.survey, sounding_footprint(*result.survey));
   if (json) std::printf("%s\n", to_json(summary).dump(2).c_str());
   else std::printf("%s", to_text(summary).c_str());
 }
@@ -44,9 +37,7 @@ void inspect_gsf(const InspectOptions& o) {
   PingOutlines outlines;
   LoadedSurvey loaded = load_survey(o.survey.input(), outlines);
   loaded.survey.pings = outlines.pings_without_beams();
-  const SoundingFootprint footprint = outlines.footprint(loaded.survey.nav);
-  SurveySummary summary = summarize(loaded.survey, line_config_for(footprint));
-  summary.footprint = footprint_of(footprint);
+  const SurveySummary summary = summarize(loaded.survey, outlines.footprint(loaded.survey.nav));
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();
     for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));

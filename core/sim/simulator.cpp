@@ -81,7 +81,6 @@ nlohmann::json drift_json(const SimulationConfig& config, const Simulation& sim)
   return json;
 }
 
-// Dead reckoning from the truth by the configured model; records what the model drew.
 // The scenario's sonar height: its mean depth less the vehicle's.
 double default_altitude_m(const SimulationConfig& config) {
   return config.terrain.mean_depth_m - config.motion.vehicle_depth_m;
@@ -106,19 +105,23 @@ SonarConfig sonar_of(const SimulationConfig& config) {
   return sonar;
 }
 
-// `scale` and `steps_scale`: how much larger the world and how many more submap steps than
-// the scenario's at its own altitude. The paper's per-step noise is then shrunk so that the drift
-// at the end is `scale` times the scenario's: the same error for the survey's size.
-std::vector<NavSample> dead_reckoning(const SimulationConfig& config,
+// Dead reckoning from the truth by the configured model; records what the model drew. `sonar`
+// is the one flown (sonar_of). At another altitude the world is larger and a submap of the same
+// pings takes longer, so there are more submap steps than in the scenario; the paper model's
+// per-step noise is shrunk so that the drift at the end is the world's scale times the
+// scenario's: the same error for the survey's size.
+std::vector<NavSample> dead_reckoning(const SimulationConfig& config, const SonarConfig& sonar,
                                       const std::vector<NavSample>& truth, double first_ping_time,
-                                      double scale, double steps_scale, Simulation& sim) {
+                                      Simulation& sim) {
   switch (config.drift) {
     case DriftModel::kPaper: {
+      const double scale = world_scale(config);
+      const double steps_scale = scale * sonar.ping_rate_hz / config.sonar.ping_rate_hz;
       PaperDrift drift = config.paper_drift;
       if (drift.sigma_yaw_rad <= 0) drift.sigma_yaw_rad = calibrated_paper_sigma_yaw();
       drift.sigma_yaw_rad /= std::sqrt(steps_scale);
       drift.sigma_translation_m *= scale / std::sqrt(steps_scale);
-      drift.submap_duration_s *= config.sonar.ping_rate_hz / sonar_of(config).ping_rate_hz;
+      drift.submap_duration_s *= config.sonar.ping_rate_hz / sonar.ping_rate_hz;
       sim.sigma_yaw_rad = drift.sigma_yaw_rad;
       sim.sigma_translation_m = drift.sigma_translation_m;
       return apply_paper_drift(truth, first_ping_time, drift, config.seed);
@@ -213,8 +216,7 @@ Simulation simulate(const SimulationConfig& config) {
     std::vector<Beam>().swap(beams_per_ping[k]);
   }
 
-  const double steps_scale = k * sonar.ping_rate_hz / config.sonar.ping_rate_hz;
-  survey.nav = dead_reckoning(config, truth, survey.pings.front().time, k, steps_scale, sim);
+  survey.nav = dead_reckoning(config, sonar, truth, survey.pings.front().time, sim);
   sim.drift = drift_stats(survey.nav, truth);
   survey.reference_nav = std::move(truth);
 

@@ -37,6 +37,7 @@ struct SoundingFootprint {
   double altitude_m = 0;  // the median over pings of their soundings' median height below the sonar
 };
 SoundingFootprint sounding_footprint(const std::vector<NavSample>& nav, const std::vector<PingSwath>& pings);
+SoundingFootprint sounding_footprint(const Survey& survey);
 
 // The sounding spacing of the survey Table 1's lengths are for: 512 beams over 140° from 9 m above
 // the bed (0.1 m apart across track on average) at 2 m/s and 10 pings a second (0.2 m along), as
@@ -47,6 +48,5 @@ inline constexpr double kPaperSpacingM = 0.14;
 // spacing over kPaperSpacingM (an octave: the lake's spacing varies by a few percent between
 // surveys, and Table 1 must stay exact there); 1 when nothing was swept.
 double length_scale(const SoundingFootprint& footprint);
-SoundingFootprint sounding_footprint(const Survey& survey);
 
 }  // namespace bathyslam

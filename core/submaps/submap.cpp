@@ -28,7 +28,6 @@ SubmapBuilder::SubmapBuilder(std::vector<NavSample> nav, std::optional<std::vect
                              const SubmapConfig& config)
     : nav_(std::move(nav)), reference_nav_(std::move(reference_nav)), config_(config) {
   set_.origin = local_origin_of(nav_);
-  set_.lines = split_lines(nav_);
 }
 
 // sync: the navigation at the ping's time; a ping outside the navigation is counted, not posed.
@@ -46,11 +45,10 @@ void SubmapBuilder::add_ping(double time, std::span<const Beam> beams) {
 
 SubmapSet SubmapBuilder::finish() {
   if (!pending_.empty()) close_submap();
+  // Lines once the footprint is known: their course window and shortest line follow it.
   set_.footprint = sounding_footprint(nav_, swaths_);
-  if (length_scale(set_.footprint) != 1) {  // split at the lake's scale until the footprint was known
-    set_.lines = split_lines(nav_, line_config_for(set_.footprint));
-    for (Submap& submap : set_.submaps) submap.line = line_at(set_.lines, nav_, submap.time_mid);
-  }
+  set_.lines = split_lines(nav_, line_config_for(set_.footprint));
+  for (Submap& submap : set_.submaps) submap.line = line_at(set_.lines, nav_, submap.time_mid);
   return std::move(set_);
 }
 
@@ -61,7 +59,6 @@ void SubmapBuilder::close_submap() {
   submap.time_begin = pending_.front().time;
   submap.time_end = pending_.back().time;
   submap.time_mid = mid.time;
-  submap.line = line_at(set_.lines, nav_, submap.time_mid);
   submap.dr_pose = mid.pose;
   if (reference_nav_) {
     if (const auto ref = interpolate_nav(*reference_nav_, submap.time_mid)) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/submaps/submap.h"
 #include "core/sync/nav_interpolation.h"
 
 namespace bathyslam {
@@ -40,8 +41,9 @@ std::string format(const char* fmt, auto... args) {
 
 }  // namespace
 
-SurveySummary summarize(const Survey& survey, const LineConfig& lines) {
+SurveySummary summarize(const Survey& survey, const std::optional<SoundingFootprint>& footprint) {
   SurveySummary s;
+  s.footprint = footprint;
   s.name = survey.metadata.name;
   s.crs = survey.metadata.crs;
   s.nav_samples = survey.nav.size();
@@ -73,7 +75,7 @@ SurveySummary summarize(const Survey& survey, const LineConfig& lines) {
     s.time_begin = std::min(s.time_begin, survey.pings.front().time);
     s.time_end = std::max(s.time_end, survey.pings.back().time);
   }
-  s.lines = split_lines(survey.nav, lines);
+  s.lines = split_lines(survey.nav, line_config_for(footprint.value_or(SoundingFootprint{})));
   if (survey.reference_nav) s.drift = drift_against(survey.nav, *survey.reference_nav, s.distance_m);
   return s;
 }
@@ -97,8 +99,8 @@ nlohmann::json to_json(const SurveySummary& s) {
       {"lines", lines},
       {"drift", nullptr}};
   if (s.footprint) {
-    j["footprint"] = {{"spacing_m", s.footprint->measured.spacing_m}, {"altitude_m", s.footprint->measured.altitude_m},
-                      {"scale", s.footprint->scale}};
+    j["footprint"] = {{"spacing_m", s.footprint->spacing_m}, {"altitude_m", s.footprint->altitude_m},
+                      {"scale", length_scale(*s.footprint)}};
   }
   if (s.drift) {
     j["drift"] = {{"end_m", s.drift->end_m}, {"mean_m", s.drift->mean_m}, {"rms_m", s.drift->rms_m},
@@ -122,7 +124,7 @@ std::string to_text(const SurveySummary& s) {
                 s.vehicle_depth_max_m, s.distance_m);
   if (s.footprint) {
     out += format("footprint   soundings %.3g m apart, %.3g m below the sonar: the SLAM core's lengths x %g\n",
-                  s.footprint->measured.spacing_m, s.footprint->measured.altitude_m, s.footprint->scale);
+                  s.footprint->spacing_m, s.footprint->altitude_m, length_scale(*s.footprint));
   }
   out += format("lines       %zu\n", s.lines.size());
   for (std::size_t i = 0; i < s.lines.size(); ++i) {

@@ -37,18 +37,14 @@ struct SurveySummary {
   };
   std::optional<Drift> drift;
 
-  // How densely the soundings lie and how many times Table 1's lengths the SLAM core will use
-  // for them (pipeline/parameters.h, footprint_scale); set by whoever measured the pings.
-  struct Footprint {
-    SoundingFootprint measured;
-    double scale = 1;
-  };
-  std::optional<Footprint> footprint;
+  // How densely the soundings lie (the SLAM core's lengths follow it: length_scale), when the
+  // caller measured the pings.
+  std::optional<SoundingFootprint> footprint;
 };
 
-// `lines`: how to split the navigation into lines (line_config_for the survey's footprint, as the
-// pipeline does).
-SurveySummary summarize(const Survey& survey, const LineConfig& lines = {});
+// `footprint`: the pings' (sounding_footprint), which the summary shows and splits the lines by as
+// the pipeline does (line_config_for); without it, the lake's lines.
+SurveySummary summarize(const Survey& survey, const std::optional<SoundingFootprint>& footprint = std::nullopt);
 nlohmann::json to_json(const SurveySummary& summary);
 std::string to_text(const SurveySummary& summary);
 

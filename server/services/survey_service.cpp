@@ -243,10 +243,7 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     storage::Validation validation{!errors, problems, nullptr};
     if (!errors && bundle.survey) {
       bundle.survey->pings = outlines.pings_without_beams();
-      const SoundingFootprint footprint = outlines.footprint(bundle.survey->nav);
-      SurveySummary summary = summarize(*bundle.survey, line_config_for(footprint));
-      summary.footprint = SurveySummary::Footprint{footprint, length_scale(footprint)};
-      validation.summary = to_json(summary);
+      validation.summary = to_json(summarize(*bundle.survey, outlines.footprint(bundle.survey->nav)));
     }
     if (!context_.surveys.save_validation_if_unchanged(survey.id, validation, uploads))
       throw Refusal(grpc::StatusCode::ABORTED, "survey " + std::to_string(survey.id) +
