@@ -209,11 +209,7 @@ Input make_input(const std::filesystem::path& bundle, std::size_t max_pairs) {
   PipelineConfig config;
   config.configuration = Configuration::kMchs;
   const SubmapSet set = build_submaps(survey, config.submaps);
-  std::vector<Eigen::Isometry3d> truth;
-  for (const Submap& s : set.submaps) {
-    if (!s.reference_pose) throw std::runtime_error("the bundle has no reference_nav.csv: no truth to compare with");
-    truth.push_back(*s.reference_pose);
-  }
+  const std::vector<Eigen::Isometry3d> truth = bench::reference_poses(set);
   Input in;
   in.crop_margin_m = config.registration.crop_margin_m;
   std::vector<SubmapFeatures> features(set.submaps.size());

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 
 #include "core/io/bundle.h"
 #include "core/sim/simulator.h"
@@ -25,6 +26,15 @@ std::filesystem::path lake_bundle(int& argc, char** argv) {
     write_bundle(sim::simulate(config).survey, bundle);
   }
   return bundle;
+}
+
+std::vector<Eigen::Isometry3d> reference_poses(const SubmapSet& submaps) {
+  std::vector<Eigen::Isometry3d> truth;
+  for (const Submap& s : submaps.submaps) {
+    if (!s.reference_pose) throw std::runtime_error("the bundle has no reference_nav.csv: no truth to compare with");
+    truth.push_back(*s.reference_pose);
+  }
+  return truth;
 }
 
 }  // namespace bathyslam::bench

@@ -97,7 +97,8 @@ Information6 widened_by_doubt(Information6 information, const OtherAnswers& othe
 // claims, and yaw out: an answer that may lie anywhere within `spread` of where it was found.
 Information6 with_horizontal_spread(Information6 information, const Eigen::Matrix2d& spread);
 
-// `information` with nothing along the horizontal `direction` (level frame).
+// `information` with nothing known along the horizontal `direction` (level frame): the offset
+// along it marginalised out, so that what is left holds whatever the offset there.
 Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction);
 
 // Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information

@@ -390,6 +390,29 @@ TEST(DoubtWidens, AddsTheSpreadToTheAnswersOwnCovarianceEvenWhereItObservesOneDi
   EXPECT_NEAR(across.dot(diagonal.topLeftCorner<2, 2>() * across) / across.squaredNorm(), 100.0, 1e-9);
 }
 
+// The cost's valley oblique to the direction taken out (sand waves: GICP's valley runs along one
+// train's crests at 113 degrees, the probe's competitors along another's at 68): an answer that
+// slid 2 m down the valley must not pull the graph across the competitors' line. Projected out,
+// the direction left kept half the steep side's curvature (the 2 m slide read as 10 sigma);
+// marginalised, only what the valley itself observes.
+TEST(DoubtWidens, ADirectionTakenOutIsMarginalisedSoThatASlideDownAnObliqueValleyCostsNothing) {
+  const double valley = 113 * M_PI / 180, removed = 68 * M_PI / 180;
+  const Eigen::Vector2d along(std::cos(valley), std::sin(valley)), steep(-along.y(), along.x());
+  Information6 own = Information6::Zero();
+  own.topLeftCorner<2, 2>() = 100.0 * steep * steep.transpose() + 0.01 * along * along.transpose();
+  own(2, 2) = 400;
+  const Information6 out = without_direction(own, Eigen::Vector2d(std::cos(removed), std::sin(removed)));
+
+  Vector6 slid = Vector6::Zero();
+  slid.head<2>() = 2.0 * along;
+  EXPECT_LT(std::sqrt(slid.dot(out * slid)), 0.5) << "a slide down the valley, in sigmas";
+  Vector6 across = Vector6::Zero();
+  across.head<2>() = steep;
+  EXPECT_GT(across.dot(out * across), 0.0) << "the valley's own curvature stays";
+  EXPECT_NEAR(out(2, 2), 400.0, 1e-9) << "depth, uncoupled, as registered";
+  EXPECT_NEAR((out.topLeftCorner<2, 2>() * Eigen::Vector2d(std::cos(removed), std::sin(removed))).norm(), 0.0, 1e-9);
+}
+
 // A registration refused under Table 1's noise is judged again under the survey's: the prior's
 // verdicts are not final.
 TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
