@@ -30,16 +30,15 @@ double weakest_direction_deg(const Eigen::Matrix2d& information) {
   return deg < 0 ? deg + 180 : deg;
 }
 
-void print_pair(const SubmapSet& set, const CandidatePair& pair, const std::vector<Eigen::Isometry3d>& truth,
+void print_pair(GicpCloudCache& prepared, const CandidatePair& pair, const std::vector<Eigen::Isometry3d>& truth,
                 const PipelineConfig& config, double shift_m) {
-  const Cloud::Ptr target = voxel_filter(set.submaps[pair.target].points, config.voxel);
-  const Cloud::Ptr source = voxel_filter(set.submaps[pair.source].points, config.voxel);
-  const OneOffPair clouds = one_off_pair(*target, *source, config.registration.gicp);
+  const PairClouds clouds = prepared_pair(prepared, pair.target, pair.source);
   const Eigen::Isometry3d true_pose = truth[pair.target].inverse() * truth[pair.source];
   const GicpConfig& gicp = config.registration.gicp;
   const double crop = config.registration.crop_margin_m;
 
-  const PairRegistration at_truth = observe_at(*clouds.target, *clouds.source, true_pose, gicp, crop);
+  const PairRegistration at_truth =
+      observe_at(*clouds.prepared_target, *clouds.prepared_source, true_pose, gicp, crop);
   const Eigen::Matrix<double, 6, 6> observed = at_truth.hessian.hessian - at_truth.hessian.regularisation;
   const Eigen::Matrix<double, 6, 6> covariance = (observed + 1e-9 * Eigen::Matrix<double, 6, 6>::Identity()).inverse();
   std::printf("%3d-%3d conditional %4.0f marginal %4.0f |", pair.target, pair.source,
@@ -50,7 +49,7 @@ void print_pair(const SubmapSet& set, const CandidatePair& pair, const std::vect
                                    Eigen::Vector2d(0, shift_m), Eigen::Vector2d(0, -shift_m)}) {
     Eigen::Isometry3d start = true_pose;
     start.pretranslate(Eigen::Vector3d(d.x(), d.y(), 0));
-    const PairRegistration landed = register_direct(clouds.clouds, start, gicp, crop);
+    const PairRegistration landed = register_direct(clouds, start, gicp, crop);
     const Eigen::Vector3d error = landed.registration.source_to_target * landed.anchor - true_pose * landed.anchor;
     std::printf(" (%+5.2f %+5.2f)", error.x(), error.y());
   }
@@ -72,6 +71,10 @@ int main(int argc, char** argv) {
   const std::vector<Eigen::Isometry3d> truth = bench::reference_poses(set);
   std::vector<CandidatePair> pairs = adjacent_line_candidates(set, truth, config.candidates);
   for (const CandidatePair& p : loop_candidates(set, truth, config.candidates)) pairs.push_back(p);
-  for (const CandidatePair& p : pairs) print_pair(set, p, truth, config, shift_m);
+  // Each submap filtered and prepared once, on its first pair, as the pipeline does.
+  GicpCloudCache prepared(
+      set.submaps.size(), [&](std::size_t i) -> Cloud::ConstPtr { return voxel_filter(set.submaps[i].points, config.voxel); },
+      config.registration.gicp);
+  for (const CandidatePair& p : pairs) print_pair(prepared, p, truth, config, shift_m);
   return 0;
 }
