@@ -92,10 +92,19 @@ struct QualityConfig {
   // instead (widened_by_doubt, resolve_alias): nothing along a direction GICP does not come
   // back along, or along which plausible competitors run on past the probe, and the scatter of
   // the other starts' landings, the nearby better fit or the plausible competitors added to the
-  // covariance of the rest. Off: on `small` sand waves it lowers the consistency RMSE 2-5x, but
-  // its loops there sit 2.5-3 m (2-3 sigma, one way) off across the crests under heading drift,
-  // beyond issue 14's 2 m: docs/slam-every-seabed.md.
-  bool doubt_widens = false;
+  // covariance of the rest. On `small` sand waves and channels it lowers the consistency RMSE
+  // 1.5-5x; widening along an alias line needs widen_min_distinctness below. 0: no horizontal
+  // information where doubt or an alias would widen it (docs/slam-every-seabed.md).
+  bool doubt_widens = true;
+  // Widening along a line of plausible competitors (resolve_alias) trusts dead reckoning to have
+  // ruled out every basin off the line. Where the best basin elsewhere fits nearly as well as the
+  // answer (Uniqueness::distinctness under this; 2 is an RMS misfit within 1.4x the answer's), the
+  // answer itself may be that basin's alias, and an estimate of the noise built from such
+  // answers is no evidence against it: the answer keeps no horizontal information. On `small`
+  // sand waves and channels every edge off by more than 2 m that widening let through (without
+  // direct_loops' reach test) had distinctness 0.47-1.41 (docs/slam-every-seabed.md). 0: not
+  // checked.
+  double widen_min_distinctness = 2.0;
 
   template <typename Field>
   void fields(Field&& field) {
@@ -110,6 +119,7 @@ struct QualityConfig {
     field("max_nearby_improvement", max_nearby_improvement, 0, 1e6);
     field("direct_yaw", direct_yaw, 0, 1);
     field("doubt_widens", doubt_widens, 0, 1);
+    field("widen_min_distinctness", widen_min_distinctness, 0, 1e6);
   }
 };
 

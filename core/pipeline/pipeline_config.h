@@ -90,19 +90,25 @@ struct PipelineConfig {
   NavigationNoiseConfig navigation_noise;
 
   // Loop closures whose overlap has too few features to match (issue 31): registered by the
-  // direct path from the batch's guess and judged as any registration is. Their horizontal
-  // information counts only when dead reckoning's noise between the two submaps keeps that guess
-  // within GICP's reach (its horizontal sigma times `reach_sigmas` within
-  // registration.gicp.max_correspondence_m); beyond it they give depth, roll and pitch. 0: refused,
-  // as in the paper.
+  // direct path from the batch's guess and judged as any registration is: the uniqueness probe,
+  // the start check, the alias rule, the DR gate, PCM and the safety net. `reach_sigmas` > 0
+  // keeps their horizontal information only where dead reckoning's noise between the two submaps
+  // keeps the truth where a wrong answer would show (its horizontal sigma times `reach_sigmas`
+  // within the probe's registration.uniqueness.search_radius_m with robustness.alias_from_prior,
+  // else within registration.gicp.max_correspondence_m); beyond it they give depth, roll and
+  // pitch. Off (0) by default: before the survey's noise is estimated that sigma is Table 1's
+  // (tens of metres across a `small` survey), and on channels, where no adjacent answer is
+  // unique, it took every loop's position away and with it every gain, while the other tests
+  // kept all 84 matrix runs safe without it (docs/slam-every-seabed.md). enabled 0: refused, as
+  // in the paper.
   struct DirectLoops {
     bool enabled = true;
-    double reach_sigmas = 2.0;
+    double reach_sigmas = 0.0;
 
     template <typename Field>
     void fields(Field&& field) {
       field("enabled", enabled, 0, 1);
-      field("reach_sigmas", reach_sigmas, 0.1, 100);
+      field("reach_sigmas", reach_sigmas, 0, 100);
     }
   } direct_loops;
 

@@ -42,14 +42,20 @@ Rejection unless_converged(const PairRegistration& reg) {
   return {};
 }
 
-// Empty when the plan registers a featureless loop closure directly and dead reckoning keeps its
-// guess within GICP's reach; otherwise why not, for the report (such a loop keeps depth, roll and
-// pitch only).
+// Empty when the plan registers a featureless loop closure directly and dead reckoning keeps the
+// truth where a wrong answer would be found out; otherwise why not, for the report (such a loop
+// keeps depth, roll and pitch only). With the alias rule that is the uniqueness probe's search
+// radius: had GICP stopped anywhere but the truth, the truth would be among the probe's
+// competitors there, and the answer would lose its position along them (resolve_alias). Without
+// it, GICP's own gate. Both use DR's covariance between the two submaps, not the batch's
+// corrected guess's, so they err long (direct_loops.reach_sigmas, off by default).
 std::string direct_loop_reach(const CandidatePair& pair, const DrNoiseModel& dr, const PipelineConfig& config,
                               const Plan& plan) {
   if (!plan.direct_loops) return "direct loop closures off";
+  if (config.direct_loops.reach_sigmas <= 0) return "";
   const double sigma = dr_horizontal_sigma(dr, pair.target, pair.source);
-  const double reach = config.registration.gicp.max_correspondence_m;
+  const double reach = plan.alias_from_prior ? config.registration.uniqueness.search_radius_m
+                                             : config.registration.gicp.max_correspondence_m;
   if (config.direct_loops.reach_sigmas * sigma <= reach) return "";
   return format("guess beyond reach: %.1f x DR sigma %.2f m > %.1f m", config.direct_loops.reach_sigmas, sigma, reach);
 }

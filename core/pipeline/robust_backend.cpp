@@ -60,7 +60,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
 
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   bool widens) {
+                   bool widens, double widen_min_distinctness) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -121,7 +121,7 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   // 7-17 sigma off across the line, the truth not among the probe's competitors.
   c.alias_spread_m = spread_of(plausible_spread / plausible);
   c.alias = AliasResolution::kInformationRemoved;
-  if (!widens || !carries_horizontal_information(c.information)) {
+  if (!widens || !carries_horizontal_information(c.information) || u.distinctness() < widen_min_distinctness) {
     c.information = without_horizontal(c.information);
     return;
   }
@@ -163,7 +163,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
     resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
-                  level_from_target, config.quality.doubt_widens);
+                  level_from_target, config.quality.doubt_widens, config.quality.widen_min_distinctness);
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

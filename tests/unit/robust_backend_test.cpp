@@ -339,6 +339,33 @@ TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) 
   for (int k : {0, 1, 5}) EXPECT_NEAR(patch.information(k, k), 0.0, 1e-9) << k;
 }
 
+// Widening along the crest line trusts dead reckoning to have ruled out every basin off the line:
+// where the best of them fits nearly as well as the answer, the answer may itself be that basin's
+// alias (on `small` sand waves and channels, loops 2-14 m off), and keeps nothing horizontal.
+TEST(AliasFromPrior, WideningNeedsTheAnswerToFitClearlyBetterThanAnyOtherBasin) {
+  const Survey2Lines s = two_lines(20, 7);
+  std::vector<Eigen::Vector2d> along_crest;
+  for (int x = -20; x <= 20; ++x) {
+    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
+  }
+  Uniqueness crest = probed_with(along_crest);
+  const double min_distinctness = QualityConfig{}.widen_min_distinctness;
+  ASSERT_GT(min_distinctness, 1.0);
+  for (const double distinctness : {0.9, 0.99 * min_distinctness, 1.01 * min_distinctness, 4.0}) {
+    crest.alternative_cost_m2 = distinctness * crest.cost_at_answer_m2;
+    Constraint c = direct_registration(s, 15, 24, crest);
+    resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
+                  Eigen::Matrix3d::Identity(), true, min_distinctness);
+    EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
+    EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
+    if (distinctness < min_distinctness) {
+      for (int k : {0, 1, 5}) EXPECT_NEAR(c.information(k, k), 0.0, 1e-9) << distinctness << " " << k;
+    } else {
+      EXPECT_NEAR(c.information(1, 1), 100.0, 1.0) << distinctness << ": across the line, the answer's own 0.1 m";
+    }
+  }
+}
+
 // GICP, started 1.06 m aside on both diagonals, comes back across the crests (y) but stays where
 // it started along them (x): only the position across stays, widened by how far the landings
 // fell from the answer.
