@@ -15,6 +15,7 @@
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/corrected_navigation.h"
+#include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "core/pipeline/streamed_survey.h"
@@ -58,9 +59,8 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
 }
 
 void run_process(const ProcessOptions& o) {
-  PipelineConfig config = preset_config(parse_configuration(o.config));
+  PipelineConfig config = configuration_of(o.config, overrides_of(o.sets));
   config.threads = o.threads;
-  for (const std::string& assignment : o.sets) set_parameter(config, assignment);
 
   const auto start = std::chrono::steady_clock::now();
   // The soundings are never held whole: nothing reads them again but --export-gsf, which reads

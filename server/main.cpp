@@ -55,7 +55,7 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
   {
     auto connection = pool.acquire();  // given back before create_tenant borrows one
     storage::Result row = connection->exec("SELECT id FROM tenants WHERE name = $1", {name});
-    if (row.rows() == 1) return row.int64(0, 0);
+    if (row.rows() == 1) return row.int64(0, "id");
   }
   return surveys.create_tenant(name);
 }

@@ -108,6 +108,48 @@ void set_parameter(PipelineConfig& config, std::string_view assignment) {
   set_parameter(config, std::string(assignment.substr(0, eq)), std::string(assignment.substr(eq + 1)));
 }
 
+namespace {
+
+template <typename Value>
+PipelineConfig configured(const std::string& preset, const std::map<std::string, Value>& overrides) {
+  PipelineConfig config;
+  try {
+    config = preset_config(preset.empty() ? Configuration::kMchs : parse_configuration(preset));
+  } catch (const std::invalid_argument& error) {
+    throw ConfigurationError("configuration", error.what());
+  }
+  for (const auto& [name, value] : overrides) {
+    try {
+      set_parameter(config, name, value);
+    } catch (const std::invalid_argument& error) {
+      throw ConfigurationError("parameters[" + name + "]", error.what());
+    }
+  }
+  return config;
+}
+
+}  // namespace
+
+PipelineConfig configuration_of(const std::string& preset, const std::map<std::string, std::string>& overrides) {
+  return configured(preset, overrides);
+}
+
+PipelineConfig configuration_of(const std::string& preset, const std::map<std::string, double>& overrides) {
+  return configured(preset, overrides);
+}
+
+std::map<std::string, std::string> overrides_of(const std::vector<std::string>& assignments) {
+  std::map<std::string, std::string> overrides;
+  for (const std::string& assignment : assignments) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) {
+      throw ConfigurationError("parameters", "expected name=value, got '" + assignment + "'");
+    }
+    overrides[assignment.substr(0, eq)] = assignment.substr(eq + 1);
+  }
+  return overrides;
+}
+
 std::map<std::string, double> parameters(const PipelineConfig& config) {
   std::map<std::string, double> out;
   PipelineConfig copy = config;  // `fields` hands out references that may be written; these are not

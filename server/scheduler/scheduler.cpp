@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 
+#include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
@@ -85,8 +86,7 @@ class JobWatcher {
 
 // The job's stored parameters (every parameter, by name) applied to a fresh config.
 PipelineConfig job_config(const storage::ClaimedJob& job, int threads) {
-  PipelineConfig config = preset_config(parse_configuration(job.configuration));
-  for (const auto& [name, value] : job.parameters.items()) set_parameter(config, name, value.get<double>());
+  PipelineConfig config = configuration_of(job.configuration, job.parameters.get<std::map<std::string, double>>());
   if (config.threads == 0) config.threads = threads;
   return config;
 }

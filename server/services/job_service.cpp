@@ -1,9 +1,11 @@
 #include "server/services/job_service.h"
 
 #include <charconv>
+#include <map>
 #include <chrono>
 #include <thread>
 
+#include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "server/log.h"
@@ -73,24 +75,12 @@ void constraint_stats(const std::map<std::string, ConstraintCounts>& groups,
 
 // The effective configuration: the configuration's preset, then the overrides, each checked by name and range.
 PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
-  PipelineConfig config;
   try {
-    // None named: the full method, as everywhere (the CLI, the library).
-    config = preset_config(request.configuration().empty() ? Configuration::kMchs
-                                                           : parse_configuration(request.configuration()));
-  } catch (const std::invalid_argument& error) {
-    throw invalid("configuration", error.what());
+    return configuration_of(request.configuration(),
+                            std::map<std::string, std::string>(request.parameters().begin(), request.parameters().end()));
+  } catch (const ConfigurationError& error) {
+    throw invalid(error.field(), error.what());
   }
-  // In name order, so that the first bad one reported is the same every time.
-  std::map<std::string, std::string> overrides(request.parameters().begin(), request.parameters().end());
-  for (const auto& [name, value] : overrides) {
-    try {
-      set_parameter(config, name, value);
-    } catch (const std::invalid_argument& error) {
-      throw invalid("parameters[" + name + "]", error.what());
-    }
-  }
-  return config;
 }
 
 }  // namespace

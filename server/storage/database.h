@@ -83,6 +83,16 @@ class Result {
   Bytes bytes(int row, int column) const;  // a bytea column
   std::optional<std::int64_t> optional_int64(int row, int column) const;
   std::optional<std::string> optional_text(int row, int column) const;
+  // The same cells by column name, as storage reads them: a reader then depends neither on the
+  // order of its SELECT nor on a struct's field order.
+  bool is_null(int row, const char* name) const { return is_null(row, column(name)); }
+  std::string_view text(int row, const char* name) const { return text(row, column(name)); }
+  std::int64_t int64(int row, const char* name) const { return int64(row, column(name)); }
+  double float8(int row, const char* name) const { return float8(row, column(name)); }
+  bool boolean(int row, const char* name) const { return boolean(row, column(name)); }
+  Bytes bytes(int row, const char* name) const { return bytes(row, column(name)); }
+  std::optional<std::int64_t> optional_int64(int row, const char* name) const { return optional_int64(row, column(name)); }
+  std::optional<std::string> optional_text(int row, const char* name) const { return optional_text(row, column(name)); }
 
  private:
   std::unique_ptr<PGresult, decltype(&PQclear)> result_;

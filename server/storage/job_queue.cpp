@@ -60,6 +60,15 @@ nlohmann::json checked_parameters(const NewJob& job) {
   return parameters;
 }
 
+JobEvent job_event_from(const Result& rows, int row) {
+  JobEvent e;
+  e.attempt = static_cast<int>(rows.int64(row, "attempt"));
+  e.stage = rows.text(row, "stage");
+  e.progress = rows.float8(row, "progress");
+  e.message = rows.text(row, "message");
+  return e;
+}
+
 std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohmann::json& parameters) {
   // NOTIFY is delivered at commit, so a woken worker always finds the job.
   return connection
@@ -68,7 +77,7 @@ std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohman
           " VALUES ($1, $2, $3, $4) RETURNING id)"
           " SELECT id, pg_notify($5, id::text) FROM job",
           {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
-      .int64(0, 0);
+      .int64(0, "id");
 }
 
 }  // namespace
@@ -85,10 +94,10 @@ std::optional<std::int64_t> JobQueue::enqueue_within_limit(const NewJob& job, st
   Transaction transaction(*connection);
   connection->exec("SELECT 1 FROM tenants WHERE id = $1 FOR UPDATE", {tenant_id});
   const std::int64_t active = connection
-                                  ->exec("SELECT count(*) FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+                                  ->exec("SELECT count(*) AS active FROM jobs j JOIN surveys s ON s.id = j.survey_id"
                                          " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
                                          {tenant_id})
-                                  .int64(0, 0);
+                                  .int64(0, "active");
   if (active >= max_active) return std::nullopt;
   const std::int64_t id = insert_job(*connection, job, parameters);
   transaction.commit();
@@ -108,10 +117,12 @@ std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
       {worker, seconds(options_.lease)});
   if (row.rows() == 0) return std::nullopt;
   ClaimedJob job;
-  job.lease = {row.int64(0, 0), worker, static_cast<int>(row.int64(0, 4))};
-  job.survey_id = row.int64(0, 1);
-  job.configuration = row.text(0, 2);
-  job.parameters = nlohmann::json::parse(row.text(0, 3));
+  job.lease.job_id = row.int64(0, "id");
+  job.lease.worker = worker;
+  job.lease.attempt = static_cast<int>(row.int64(0, "attempts"));
+  job.survey_id = row.int64(0, "survey_id");
+  job.configuration = row.text(0, "configuration");
+  job.parameters = nlohmann::json::parse(row.text(0, "parameters"));
   return job;
 }
 
@@ -191,10 +202,10 @@ int requeue_or_fail(Connection& connection, std::string_view where, std::string_
           "  SELECT id, attempts, '" + std::string(stage) + "', 0, format('%s; %s', " + said +
           ", CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM changed"
           ")"
-          " SELECT count(*), count(*) FILTER (WHERE state = 'queued') FROM changed",
+          " SELECT count(*) AS changed, count(*) FILTER (WHERE state = 'queued') AS requeued FROM changed",
       params);
-  if (changed.int64(0, 1) > 0) connection.exec("SELECT pg_notify($1, '')", {kChannel});
-  return static_cast<int>(changed.int64(0, 0));
+  if (changed.int64(0, "requeued") > 0) connection.exec("SELECT pg_notify($1, '')", {kChannel});
+  return static_cast<int>(changed.int64(0, "changed"));
 }
 
 }  // namespace
@@ -239,9 +250,7 @@ std::vector<JobEvent> JobQueue::events(std::int64_t job_id) {
   Result rows = connection->exec(
       "SELECT attempt, stage, progress, message FROM job_events WHERE job_id = $1 ORDER BY id", {job_id});
   std::vector<JobEvent> events;
-  for (int row = 0; row < rows.rows(); ++row)
-    events.push_back({static_cast<int>(rows.int64(row, 0)), std::string(rows.text(row, 1)), rows.float8(row, 2),
-                      std::string(rows.text(row, 3))});
+  for (int row = 0; row < rows.rows(); ++row) events.push_back(job_event_from(rows, row));
   return events;
 }
 
@@ -251,9 +260,16 @@ JobStatus JobQueue::status(std::int64_t job_id) {
       "SELECT id, survey_id, configuration, state, attempts, max_attempts, worker, error FROM jobs WHERE id = $1",
       {job_id});
   if (row.rows() == 0) throw std::out_of_range("no job " + std::to_string(job_id));
-  return {row.int64(0, 0), row.int64(0, 1), std::string(row.text(0, 2)), parse_job_state(row.text(0, 3)),
-          static_cast<int>(row.int64(0, 4)), static_cast<int>(row.int64(0, 5)), row.optional_text(0, 6),
-          row.optional_text(0, 7)};
+  JobStatus status;
+  status.id = row.int64(0, "id");
+  status.survey_id = row.int64(0, "survey_id");
+  status.configuration = row.text(0, "configuration");
+  status.state = parse_job_state(row.text(0, "state"));
+  status.attempts = static_cast<int>(row.int64(0, "attempts"));
+  status.max_attempts = static_cast<int>(row.int64(0, "max_attempts"));
+  status.worker = row.optional_text(0, "worker");
+  status.error = row.optional_text(0, "error");
+  return status;
 }
 
 namespace {
@@ -269,22 +285,21 @@ constexpr std::string_view kJobColumns =
 
 std::vector<JobRecord> job_records(const Result& rows) {
   std::vector<JobRecord> jobs;
-  auto at = [&](const char* name) { return rows.column(name); };
   for (int row = 0; row < rows.rows(); ++row) {
     JobRecord job;
-    job.id = rows.int64(row, at("id"));
-    job.survey_id = rows.int64(row, at("survey_id"));
-    job.tenant_id = rows.int64(row, at("tenant_id"));
-    job.configuration = rows.text(row, at("configuration"));
-    job.state = parse_job_state(rows.text(row, at("state")));
-    job.attempts = static_cast<int>(rows.int64(row, at("attempts")));
-    job.error = rows.optional_text(row, at("error"));
-    job.parameters = nlohmann::json::parse(rows.text(row, at("parameters")));
-    job.created_at = rows.float8(row, at("created_at"));
-    job.started_at = rows.float8(row, at("started_at"));
-    job.finished_at = rows.float8(row, at("finished_at"));
-    job.stage = rows.text(row, at("stage"));
-    job.progress = rows.float8(row, at("progress"));
+    job.id = rows.int64(row, "id");
+    job.survey_id = rows.int64(row, "survey_id");
+    job.tenant_id = rows.int64(row, "tenant_id");
+    job.configuration = rows.text(row, "configuration");
+    job.state = parse_job_state(rows.text(row, "state"));
+    job.attempts = static_cast<int>(rows.int64(row, "attempts"));
+    job.error = rows.optional_text(row, "error");
+    job.parameters = nlohmann::json::parse(rows.text(row, "parameters"));
+    job.created_at = rows.float8(row, "created_at");
+    job.started_at = rows.float8(row, "started_at");
+    job.finished_at = rows.float8(row, "finished_at");
+    job.stage = rows.text(row, "stage");
+    job.progress = rows.float8(row, "progress");
     jobs.push_back(std::move(job));
   }
   return jobs;
@@ -312,24 +327,26 @@ std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional
 int JobQueue::active_jobs(std::int64_t tenant_id) {
   auto connection = pool_.acquire();
   return static_cast<int>(connection
-                              ->exec("SELECT count(*) FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+                              ->exec("SELECT count(*) AS active FROM jobs j JOIN surveys s ON s.id = j.survey_id"
                                      " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
                                      {tenant_id})
-                              .int64(0, 0));
+                              .int64(0, "active"));
 }
 
 std::vector<StoredJobEvent> JobQueue::events_after(std::int64_t job_id, std::int64_t after_event_id) {
   auto connection = pool_.acquire();
   Result rows = connection->exec(
-      "SELECT id, attempt, stage, progress, message, extract(epoch FROM at)::float8 FROM job_events"
+      "SELECT id, attempt, stage, progress, message, extract(epoch FROM at)::float8 AS at FROM job_events"
       " WHERE job_id = $1 AND id > $2 ORDER BY id",
       {job_id, after_event_id});
   std::vector<StoredJobEvent> events;
-  for (int row = 0; row < rows.rows(); ++row)
-    events.push_back({rows.int64(row, 0),
-                      {static_cast<int>(rows.int64(row, 1)), std::string(rows.text(row, 2)), rows.float8(row, 3),
-                       std::string(rows.text(row, 4))},
-                      rows.float8(row, 5)});
+  for (int row = 0; row < rows.rows(); ++row) {
+    StoredJobEvent e;
+    e.id = rows.int64(row, "id");
+    e.event = job_event_from(rows, row);
+    e.at = rows.float8(row, "at");
+    events.push_back(e);
+  }
   return events;
 }
 

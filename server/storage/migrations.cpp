@@ -45,9 +45,10 @@ const std::vector<Migration>& embedded_migrations() {
 }
 
 int schema_version(Connection& connection) {
-  Result exists = connection.exec("SELECT to_regclass('schema_migrations') IS NOT NULL");
-  if (!exists.boolean(0, 0)) return 0;
-  return static_cast<int>(connection.exec("SELECT coalesce(max(version), 0) FROM schema_migrations").int64(0, 0));
+  Result exists = connection.exec("SELECT to_regclass('schema_migrations') IS NOT NULL AS present");
+  if (!exists.boolean(0, "present")) return 0;
+  return static_cast<int>(
+      connection.exec("SELECT coalesce(max(version), 0) AS version FROM schema_migrations").int64(0, "version"));
 }
 
 std::vector<int> migrate(Connection& connection, const std::vector<Migration>& migrations) {

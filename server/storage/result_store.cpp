@@ -105,14 +105,15 @@ std::vector<Submap> ResultStore::load_submaps(std::int64_t job_id) {
   std::vector<Submap> submaps(rows.rows());
   for (int row = 0; row < rows.rows(); ++row) {
     Submap& s = submaps[row];
-    s.index = static_cast<int>(rows.int64(row, 0));
-    s.line = static_cast<int>(rows.int64(row, 1));
-    s.time_begin = rows.float8(row, 2);
-    s.time_mid = rows.float8(row, 3);
-    s.time_end = rows.float8(row, 4);
-    s.dr_pose = parse_pose(rows.text(row, 5));
-    if (!rows.is_null(row, 6)) s.reference_pose = parse_pose(rows.text(row, 6));
-    s.points = decode_points(rows.text(row, 8), rows.bytes(row, 9), static_cast<std::size_t>(rows.int64(row, 7)));
+    s.index = static_cast<int>(rows.int64(row, "idx"));
+    s.line = static_cast<int>(rows.int64(row, "line"));
+    s.time_begin = rows.float8(row, "time_begin");
+    s.time_mid = rows.float8(row, "time_mid");
+    s.time_end = rows.float8(row, "time_end");
+    s.dr_pose = parse_pose(rows.text(row, "dr_pose"));
+    if (!rows.is_null(row, "reference_pose")) s.reference_pose = parse_pose(rows.text(row, "reference_pose"));
+    s.points = decode_points(rows.text(row, "points_encoding"), rows.bytes(row, "points"),
+                             static_cast<std::size_t>(rows.int64(row, "point_count")));
   }
   return submaps;
 }
@@ -125,7 +126,7 @@ std::vector<int> ResultStore::submaps_overlapping(std::int64_t job_id, const Eig
       " AND footprint && box(point($2, $3), point($4, $5))::polygon ORDER BY idx",
       {job_id, corners[0], corners[1], corners[2], corners[3]});
   std::vector<int> indices;
-  for (int row = 0; row < rows.rows(); ++row) indices.push_back(static_cast<int>(rows.int64(row, 0)));
+  for (int row = 0; row < rows.rows(); ++row) indices.push_back(static_cast<int>(rows.int64(row, "idx")));
   return indices;
 }
 
@@ -152,32 +153,31 @@ std::vector<Param> constraint_row(std::int64_t job_id, std::size_t idx, const Co
 }
 
 Constraint constraint_from(const Result& rows, int row) {
-  auto at = [&](const char* name) { return rows.column(name); };
   Constraint c;
-  c.type = parse_constraint_type(std::string(rows.text(row, at("type"))));
-  if (const auto path = rows.optional_text(row, at("path"))) c.path = parse_registration_path(*path);
-  c.from = static_cast<int>(rows.int64(row, at("from_submap")));
-  c.to = static_cast<int>(rows.int64(row, at("to_submap")));
-  c.measured = parse_pose(rows.text(row, at("measured")));
-  c.guess = parse_pose(rows.text(row, at("guess")));
-  const std::vector<double> information = parse_float8_array(rows.text(row, at("information")));
+  c.type = parse_constraint_type(std::string(rows.text(row, "type")));
+  if (const auto path = rows.optional_text(row, "path")) c.path = parse_registration_path(*path);
+  c.from = static_cast<int>(rows.int64(row, "from_submap"));
+  c.to = static_cast<int>(rows.int64(row, "to_submap"));
+  c.measured = parse_pose(rows.text(row, "measured"));
+  c.guess = parse_pose(rows.text(row, "guess"));
+  const std::vector<double> information = parse_float8_array(rows.text(row, "information"));
   if (information.size() != 36) throw std::runtime_error("an information matrix needs 36 numbers");
   c.information = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(information.data());
-  c.quality.converged = rows.boolean(row, at("converged"));
-  c.quality.fitness = rows.float8(row, at("fitness"));
-  c.quality.overlap_points = static_cast<std::size_t>(rows.int64(row, at("overlap_points")));
-  c.quality.overlap_mse_m2 = rows.float8(row, at("overlap_mse_m2"));
-  c.overlap_fraction = rows.float8(row, at("overlap_fraction"));
-  c.rejection = {parse_rejection_kind(std::string(rows.text(row, at("rejection")))), std::string(rows.text(row, at("reason")))};
-  c.exclusion = {parse_rejection_kind(std::string(rows.text(row, at("exclusion")))),
-                 std::string(rows.text(row, at("exclusion_reason")))};
-  const std::vector<double> anchor = parse_float8_array(rows.text(row, at("anchor")));
+  c.quality.converged = rows.boolean(row, "converged");
+  c.quality.fitness = rows.float8(row, "fitness");
+  c.quality.overlap_points = static_cast<std::size_t>(rows.int64(row, "overlap_points"));
+  c.quality.overlap_mse_m2 = rows.float8(row, "overlap_mse_m2");
+  c.overlap_fraction = rows.float8(row, "overlap_fraction");
+  c.rejection = {parse_rejection_kind(std::string(rows.text(row, "rejection"))), std::string(rows.text(row, "reason"))};
+  c.exclusion = {parse_rejection_kind(std::string(rows.text(row, "exclusion"))),
+                 std::string(rows.text(row, "exclusion_reason"))};
+  const std::vector<double> anchor = parse_float8_array(rows.text(row, "anchor"));
   if (anchor.size() != 3) throw std::runtime_error("an anchor needs 3 numbers");
   c.anchor = Eigen::Vector3d(anchor[0], anchor[1], anchor[2]);
-  c.path_reason = rows.text(row, at("path_reason"));
-  c.feature_density = rows.float8(row, at("feature_density"));
-  c.matches = static_cast<int>(rows.int64(row, at("matches")));
-  c.inlier_ratio = rows.float8(row, at("inlier_ratio"));
+  c.path_reason = rows.text(row, "path_reason");
+  c.feature_density = rows.float8(row, "feature_density");
+  c.matches = static_cast<int>(rows.int64(row, "matches"));
+  c.inlier_ratio = rows.float8(row, "inlier_ratio");
   return c;
 }
 
@@ -231,8 +231,8 @@ std::vector<Eigen::Isometry3d> ResultStore::load_optimized_poses(std::int64_t jo
   Result rows = connection->exec("SELECT submap, pose FROM optimized_poses WHERE job_id = $1 ORDER BY submap", {job_id});
   std::vector<Eigen::Isometry3d> poses;
   for (int row = 0; row < rows.rows(); ++row) {
-    if (rows.int64(row, 0) != row) throw std::runtime_error("optimized poses of job " + std::to_string(job_id) + " have a gap");
-    poses.push_back(parse_pose(rows.text(row, 1)));
+    if (rows.int64(row, "submap") != row) throw std::runtime_error("optimized poses of job " + std::to_string(job_id) + " have a gap");
+    poses.push_back(parse_pose(rows.text(row, "pose")));
   }
   return poses;
 }
@@ -257,7 +257,7 @@ std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) 
       "SELECT data FROM tiles WHERE job_id = $1 AND format = $2 AND level = $3 AND tile_col = $4 AND tile_row = $5",
       {job_id, key.format, key.level, key.col, key.row});
   if (row.rows() == 0) return std::nullopt;
-  return row.bytes(0, 0);
+  return row.bytes(0, "data");
 }
 
 std::vector<SubmapPose> ResultStore::submap_poses(std::int64_t job_id) {
@@ -265,7 +265,7 @@ std::vector<SubmapPose> ResultStore::submap_poses(std::int64_t job_id) {
   Result rows = connection->exec("SELECT idx, time_mid, dr_pose FROM submaps WHERE job_id = $1 ORDER BY idx", {job_id});
   std::vector<SubmapPose> poses;
   for (int row = 0; row < rows.rows(); ++row)
-    poses.push_back({static_cast<int>(rows.int64(row, 0)), rows.float8(row, 1), parse_pose(rows.text(row, 2))});
+    poses.push_back({static_cast<int>(rows.int64(row, "idx")), rows.float8(row, "time_mid"), parse_pose(rows.text(row, "dr_pose"))});
   return poses;
 }
 
@@ -276,8 +276,8 @@ std::vector<TileKey> ResultStore::tiles(std::int64_t job_id) {
       {job_id});
   std::vector<TileKey> keys;
   for (int row = 0; row < rows.rows(); ++row)
-    keys.push_back({std::string(rows.text(row, 0)), static_cast<int>(rows.int64(row, 1)),
-                    static_cast<int>(rows.int64(row, 2)), static_cast<int>(rows.int64(row, 3))});
+    keys.push_back({std::string(rows.text(row, "format")), static_cast<int>(rows.int64(row, "level")),
+                    static_cast<int>(rows.int64(row, "tile_col")), static_cast<int>(rows.int64(row, "tile_row"))});
   return keys;
 }
 
@@ -312,20 +312,20 @@ std::optional<std::int64_t> ResultStore::file_size(std::int64_t job_id, const st
   auto connection = pool_.acquire();
   Result row = connection->exec("SELECT size_bytes FROM job_files WHERE job_id = $1 AND name = $2", {job_id, name});
   if (row.rows() == 0) return std::nullopt;
-  return row.int64(0, 0);
+  return row.int64(0, "size_bytes");
 }
 
 bool ResultStore::read_file(std::int64_t job_id, const std::string& name, const std::function<void(const Bytes&)>& sink) {
   auto connection = pool_.acquire();
   Result head = connection->exec("SELECT chunk_count FROM job_files WHERE job_id = $1 AND name = $2", {job_id, name});
   if (head.rows() == 0) return false;
-  const std::int64_t chunks = head.int64(0, 0);
+  const std::int64_t chunks = head.int64(0, "chunk_count");
   for (std::int64_t seq = 0; seq < chunks; ++seq) {
     Result chunk = connection->exec("SELECT data FROM job_file_chunks WHERE job_id = $1 AND name = $2 AND seq = $3",
                                     {job_id, name, seq});
     if (chunk.rows() == 0)
       throw std::runtime_error("job " + std::to_string(job_id) + " file '" + name + "': chunk " + std::to_string(seq) + " is missing");
-    sink(chunk.bytes(0, 0));
+    sink(chunk.bytes(0, "data"));
   }
   return true;
 }
@@ -349,8 +349,16 @@ std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
       " FROM maps WHERE job_id = $1",
       {job_id});
   if (row.rows() == 0) return std::nullopt;
-  return MapGrid{static_cast<int>(row.int64(0, 0)), row.float8(0, 1), row.float8(0, 2), row.float8(0, 3),
-                 row.float8(0, 4), row.float8(0, 5), static_cast<int>(row.int64(0, 6)), static_cast<int>(row.int64(0, 7))};
+  MapGrid g;
+  g.epsg = static_cast<int>(row.int64(0, "epsg"));
+  g.resolution_m = row.float8(0, "resolution_m");
+  g.min_easting = row.float8(0, "min_easting");
+  g.min_northing = row.float8(0, "min_northing");
+  g.max_easting = row.float8(0, "max_easting");
+  g.max_northing = row.float8(0, "max_northing");
+  g.tile_size_cells = static_cast<int>(row.int64(0, "tile_size_cells"));
+  g.levels = static_cast<int>(row.int64(0, "levels"));
+  return g;
 }
 
 void ResultStore::save_origin(std::int64_t job_id, const LocalOrigin& origin) {
@@ -381,7 +389,10 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
   Result row = connection->exec(
       "SELECT origin_easting, origin_northing FROM jobs WHERE id = $1 AND origin_easting IS NOT NULL", {job_id});
   if (row.rows() == 0) return std::nullopt;
-  return LocalOrigin{row.float8(0, 0), row.float8(0, 1)};
+  LocalOrigin origin;
+  origin.easting = row.float8(0, "origin_easting");
+  origin.northing = row.float8(0, "origin_northing");
+  return origin;
 }
 
 void ResultStore::discard(std::int64_t job_id) {
@@ -410,9 +421,9 @@ std::optional<Report> ResultStore::load_report(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Result head = connection->exec("SELECT report FROM reports WHERE job_id = $1", {job_id});
   if (head.rows() == 0) return std::nullopt;
-  Report report{nlohmann::json::parse(head.text(0, 0)), {}};
+  Report report{nlohmann::json::parse(head.text(0, "report")), {}};
   Result plots = connection->exec("SELECT name, png FROM report_plots WHERE job_id = $1", {job_id});
-  for (int row = 0; row < plots.rows(); ++row) report.plots[std::string(plots.text(row, 0))] = plots.bytes(row, 1);
+  for (int row = 0; row < plots.rows(); ++row) report.plots[std::string(plots.text(row, "name"))] = plots.bytes(row, "png");
   return report;
 }
 

@@ -55,28 +55,40 @@ void for_each_chunk(Connection& connection, std::int64_t file_id, std::int64_t c
   for (std::int64_t seq = 0; seq < chunk_count; ++seq) {
     Result chunk = connection.exec("SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq = $2", {file_id, seq});
     if (chunk.rows() == 0) throw std::runtime_error("survey file '" + name + "': chunk " + std::to_string(seq) + " is missing");
-    sink(chunk.bytes(0, 0));
+    sink(chunk.bytes(0, "data"));
   }
 }
 
 constexpr std::string_view kSurveyColumns =
-    "SELECT s.id, s.tenant_id, s.name, s.crs, s.sonar, s.vehicle, coalesce(v.valid, false)"
+    "SELECT s.id, s.tenant_id, s.name, s.crs, s.sonar, s.vehicle, coalesce(v.valid, false) AS ready"
     " FROM surveys s LEFT JOIN survey_validations v ON v.survey_id = s.id";
 
 std::vector<SurveyRecord> survey_records(const Result& rows) {
   std::vector<SurveyRecord> surveys;
-  for (int row = 0; row < rows.rows(); ++row)
-    surveys.push_back({rows.int64(row, 0), rows.int64(row, 1), std::string(rows.text(row, 2)),
-                       std::string(rows.text(row, 3)), nlohmann::json::parse(rows.text(row, 4)),
-                       nlohmann::json::parse(rows.text(row, 5)), rows.boolean(row, 6)});
+  for (int row = 0; row < rows.rows(); ++row) {
+    SurveyRecord survey;
+    survey.id = rows.int64(row, "id");
+    survey.tenant_id = rows.int64(row, "tenant_id");
+    survey.name = rows.text(row, "name");
+    survey.crs = rows.text(row, "crs");
+    survey.sonar = nlohmann::json::parse(rows.text(row, "sonar"));
+    survey.vehicle = nlohmann::json::parse(rows.text(row, "vehicle"));
+    survey.ready = rows.boolean(row, "ready");
+    surveys.push_back(std::move(survey));
+  }
   return surveys;
 }
 
 constexpr std::string_view kUploadColumns = "SELECT name, size_bytes, committed_bytes, complete, sha256 FROM survey_files";
 
 UploadState upload_row(const Result& rows, int row) {
-  return {std::string(rows.text(row, 0)), rows.int64(row, 1), rows.int64(row, 2), rows.boolean(row, 3),
-          to_sha256(rows.bytes(row, 4))};
+  UploadState state;
+  state.name = rows.text(row, "name");
+  state.size_bytes = rows.int64(row, "size_bytes");
+  state.committed_bytes = rows.int64(row, "committed_bytes");
+  state.complete = rows.boolean(row, "complete");
+  state.sha256 = to_sha256(rows.bytes(row, "sha256"));
+  return state;
 }
 
 // The survey's uploads in name order, on a connection the caller may hold in a transaction.
@@ -116,7 +128,7 @@ SurveyStore::SurveyStore(ConnectionPool& pool, std::size_t chunk_bytes) : pool_(
 std::int64_t SurveyStore::create_tenant(const std::string& name) {
   if (name.empty()) throw std::invalid_argument("a tenant needs a name");
   auto connection = pool_.acquire();
-  return connection->exec("INSERT INTO tenants (name) VALUES ($1) RETURNING id", {name}).int64(0, 0);
+  return connection->exec("INSERT INTO tenants (name) VALUES ($1) RETURNING id", {name}).int64(0, "id");
 }
 
 std::string SurveyStore::issue_token(std::int64_t tenant_id, const std::string& description, double valid_for_s) {
@@ -141,7 +153,7 @@ std::optional<std::int64_t> SurveyStore::tenant_of_token(const std::string& toke
       " AND (expires_at IS NULL OR expires_at > now())",
       {token_hash(token)});
   if (row.rows() == 0) return std::nullopt;
-  return row.int64(0, 0);
+  return row.int64(0, "tenant_id");
 }
 
 bool SurveyStore::revoke_token(const std::string& token) {
@@ -161,17 +173,20 @@ bool SurveyStore::revoke_token(std::int64_t token_id) {
 std::vector<TokenInfo> SurveyStore::list_tokens(const std::optional<std::string>& tenant) {
   auto connection = pool_.acquire();
   Result rows = connection->exec(
-      "SELECT t.id, n.name, t.description, extract(epoch FROM t.created_at)::float8,"
-      " extract(epoch FROM t.revoked_at)::float8, extract(epoch FROM t.expires_at)::float8"
+      "SELECT t.id, n.name AS tenant, t.description, extract(epoch FROM t.created_at)::float8 AS created_at,"
+      " extract(epoch FROM t.revoked_at)::float8 AS revoked_at, extract(epoch FROM t.expires_at)::float8 AS expires_at"
       " FROM api_tokens t JOIN tenants n ON n.id = t.tenant_id"
       " WHERE $1::text IS NULL OR n.name = $1 ORDER BY t.id",
       {tenant});
   std::vector<TokenInfo> tokens;
   for (int row = 0; row < rows.rows(); ++row) {
-    TokenInfo token{rows.int64(row, 0), std::string(rows.text(row, 1)), std::string(rows.text(row, 2)),
-                    rows.float8(row, 3), std::nullopt, std::nullopt};
-    if (!rows.is_null(row, 4)) token.revoked_at = rows.float8(row, 4);
-    if (!rows.is_null(row, 5)) token.expires_at = rows.float8(row, 5);
+    TokenInfo token;
+    token.id = rows.int64(row, "id");
+    token.tenant = rows.text(row, "tenant");
+    token.description = rows.text(row, "description");
+    token.created_at = rows.float8(row, "created_at");
+    if (!rows.is_null(row, "revoked_at")) token.revoked_at = rows.float8(row, "revoked_at");
+    if (!rows.is_null(row, "expires_at")) token.expires_at = rows.float8(row, "expires_at");
     tokens.push_back(std::move(token));
   }
   return tokens;
@@ -188,7 +203,7 @@ std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::strin
   Transaction transaction(*connection);
   std::int64_t survey_id =
       connection->exec("INSERT INTO surveys (tenant_id, name) VALUES ($1, $2) RETURNING id", {tenant_id, name})
-          .int64(0, 0);
+          .int64(0, "id");
   for (const FileUpload& file : files) {
     const std::size_t chunks = (file.content.size() + chunk_bytes_ - 1) / chunk_bytes_;
     std::int64_t file_id =
@@ -196,7 +211,7 @@ std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::strin
             ->exec("INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"
                    " VALUES ($1, $2, $3, $4, $5, $3, true) RETURNING id",
                    {survey_id, file.name, file.content.size(), digest_bytes(sha256(file.content)), chunks})
-            .int64(0, 0);
+            .int64(0, "id");
     for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
       auto begin = file.content.begin() + static_cast<std::ptrdiff_t>(chunk * chunk_bytes_);
       auto end = file.content.begin() + static_cast<std::ptrdiff_t>(std::min(file.content.size(), (chunk + 1) * chunk_bytes_));
@@ -215,8 +230,13 @@ std::vector<StoredFile> SurveyStore::files(std::int64_t survey_id) {
       {survey_id});
   std::vector<StoredFile> files;
   for (int row = 0; row < rows.rows(); ++row) {
-    files.push_back({rows.int64(row, 0), std::string(rows.text(row, 1)), rows.int64(row, 2),
-                     to_sha256(rows.bytes(row, 3)), static_cast<int>(rows.int64(row, 4))});
+    StoredFile file;
+    file.id = rows.int64(row, "id");
+    file.name = rows.text(row, "name");
+    file.size_bytes = rows.int64(row, "size_bytes");
+    file.sha256 = to_sha256(rows.bytes(row, "sha256"));
+    file.chunk_count = static_cast<int>(rows.int64(row, "chunk_count"));
+    files.push_back(std::move(file));
   }
   return files;
 }
@@ -229,10 +249,11 @@ Bytes SurveyStore::read_file(std::int64_t survey_id, const std::string& name) {
   if (file.rows() == 0)
     throw std::out_of_range("survey " + std::to_string(survey_id) + " has no file '" + name + "'");
   Bytes content;
-  content.reserve(static_cast<std::size_t>(file.int64(0, 1)));
-  for_each_chunk(*connection, file.int64(0, 0), file.int64(0, 3), name,
+  content.reserve(static_cast<std::size_t>(file.int64(0, "size_bytes")));
+  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name,
                  [&](const Bytes& data) { content.insert(content.end(), data.begin(), data.end()); });
-  if (static_cast<std::int64_t>(content.size()) != file.int64(0, 1) || digest_bytes(sha256(content)) != file.bytes(0, 2))
+  if (static_cast<std::int64_t>(content.size()) != file.int64(0, "size_bytes") ||
+      digest_bytes(sha256(content)) != file.bytes(0, "sha256"))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
   return content;
 }
@@ -272,8 +293,10 @@ std::optional<Validation> SurveyStore::validation(std::int64_t survey_id) {
   Result row = connection->exec("SELECT valid, problems, summary FROM survey_validations WHERE survey_id = $1",
                                 {survey_id});
   if (row.rows() == 0) return std::nullopt;
-  Validation validation{row.boolean(0, 0), nlohmann::json::parse(row.text(0, 1)), nullptr};
-  if (!row.is_null(0, 2)) validation.summary = nlohmann::json::parse(row.text(0, 2));
+  Validation validation;
+  validation.valid = row.boolean(0, "valid");
+  validation.problems = nlohmann::json::parse(row.text(0, "problems"));
+  if (!row.is_null(0, "summary")) validation.summary = nlohmann::json::parse(row.text(0, "summary"));
   return validation;
 }
 
@@ -291,7 +314,7 @@ std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::strin
     return connection
         ->exec("INSERT INTO surveys (tenant_id, name, crs, sonar, vehicle) VALUES ($1, $2, $3, $4, $5) RETURNING id",
                {tenant_id, name, crs, sonar.dump(), vehicle.dump()})
-        .int64(0, 0);
+        .int64(0, "id");
   } catch (const DatabaseError& error) {
     if (error.sqlstate() == "23505") throw std::invalid_argument("name: a survey named '" + name + "' exists already");
     throw;
@@ -325,11 +348,11 @@ UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string&
   Transaction transaction(*connection);
   // Locks the survey row: two uploads of the same file cannot both create it.
   Result survey = connection->exec(
-      "SELECT coalesce(v.valid, false) FROM surveys s LEFT JOIN survey_validations v ON v.survey_id = s.id"
+      "SELECT coalesce(v.valid, false) AS valid FROM surveys s LEFT JOIN survey_validations v ON v.survey_id = s.id"
       " WHERE s.id = $1 FOR UPDATE OF s",
       {survey_id});
   if (survey.rows() == 0) throw UploadError(UploadError::Kind::kNotFound, "no survey " + std::to_string(survey_id));
-  if (survey.boolean(0, 0))
+  if (survey.boolean(0, "valid"))
     throw UploadError(UploadError::Kind::kFinalized, "survey " + std::to_string(survey_id) + " is finalized: its files are fixed");
   Result existing = connection->exec(std::string(kUploadColumns) + " WHERE survey_id = $1 AND name = $2", {survey_id, name});
   if (existing.rows() == 1) {
@@ -337,7 +360,8 @@ UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string&
     if (state.size_bytes == size_bytes && state.sha256 == digest) return state;  // a resumed upload
     connection->exec("DELETE FROM survey_files WHERE survey_id = $1 AND name = $2", {survey_id, name});
   } else if (const std::int64_t files =
-                 connection->exec("SELECT count(*) FROM survey_files WHERE survey_id = $1", {survey_id}).int64(0, 0);
+                 connection->exec("SELECT count(*) AS files FROM survey_files WHERE survey_id = $1", {survey_id})
+                     .int64(0, "files");
              files >= kMaxFilesPerSurvey) {
     // Counted under the survey's lock: concurrent uploads cannot pass the limit together.
     throw UploadError(UploadError::Kind::kTooMany, "file_name: survey " + std::to_string(survey_id) + " holds " +
@@ -457,13 +481,13 @@ void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, s
   if (file.rows() == 0) throw std::out_of_range("survey " + std::to_string(survey_id) + " has no complete file '" + name + "'");
   Sha256Stream digest;
   std::int64_t size = 0;
-  for_each_chunk(*connection, file.int64(0, 0), file.int64(0, 3), name, [&](const Bytes& data) {
+  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name, [&](const Bytes& data) {
     digest.add(data);
     size += static_cast<std::int64_t>(data.size());
     out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
   });
   if (!out) throw std::runtime_error("survey file '" + name + "': cannot write the copy");
-  if (size != file.int64(0, 1) || digest.finish() != to_sha256(file.bytes(0, 2)))
+  if (size != file.int64(0, "size_bytes") || digest.finish() != to_sha256(file.bytes(0, "sha256")))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
 }
 

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <string>
 #include <new>
 
 namespace bathyslam {
@@ -159,6 +161,40 @@ TEST(Configurations, ArePresetsOfTheStagesAndEveryAblationIsASetting) {
   EXPECT_EQ(plan_of(batched_gicp).batch_submaps, 5);
   for (const char* name : kConfigurationNames) EXPECT_EQ(to_string(parse_configuration(name)), name);
   EXPECT_THROW(parse_configuration("slam"), std::invalid_argument);
+}
+
+// The CLI, the service and the scheduler make a configuration the same way: the preset (none
+// named: mchs), then the overrides by name; a bad one is named as a request names it.
+TEST(Parameters, OneWayFromAPresetAndOverridesToAConfiguration) {
+  const PipelineConfig none_named = configuration_of("", std::map<std::string, std::string>{});
+  EXPECT_EQ(none_named.configuration, Configuration::kMchs);
+  EXPECT_EQ(parameters(none_named), parameters(preset_config(Configuration::kMchs)));
+
+  const PipelineConfig gicp = configuration_of("gicp", {{"registration.gicp.neighbours", "25"}, {"stages.batch_submaps", "5"}});
+  EXPECT_EQ(gicp.configuration, Configuration::kGicp);
+  EXPECT_EQ(gicp.registration.gicp.neighbours, 25);
+  EXPECT_EQ(gicp.stages.batch_submaps, 5);
+  // A stored job's numbers give the same configuration as the text a user typed.
+  EXPECT_EQ(parameters(configuration_of("gicp", std::map<std::string, double>{{"registration.gicp.neighbours", 25.0},
+                                                                               {"stages.batch_submaps", 5.0}})),
+            parameters(gicp));
+
+  auto field_of = [](auto&& make) -> std::string {
+    try {
+      make();
+    } catch (const ConfigurationError& error) {
+      return error.field() + ": " + error.what();
+    }
+    return "no error";
+  };
+  EXPECT_THAT(field_of([] { configuration_of("slam", std::map<std::string, std::string>{}); }), HasSubstr("configuration: "));
+  // In name order: of two bad overrides the first by name is the one named, whatever the request's order.
+  EXPECT_THAT(field_of([] { configuration_of("mchs", {{"z.unknown", "1"}, {"grid.cell_m", "-1"}}); }),
+              HasSubstr("parameters[grid.cell_m]: "));
+  EXPECT_THAT(field_of([] { overrides_of({"grid.cell_m"}); }), HasSubstr("expected name=value"));
+
+  const std::map<std::string, std::string> sets = overrides_of({"grid.cell_m=0.7", "grid.cell_m=0.9"});
+  EXPECT_EQ(sets.at("grid.cell_m"), "0.9") << "the last of a name wins, as the arguments were applied in order";
 }
 
 }  // namespace

@@ -1,0 +1,128 @@
+// The scheduler's job flow against a real PostgreSQL: a stored survey and a queued job go in, and
+// the job's results come out of the database as `process` makes them offline.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <thread>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "core/io/bundle.h"
+#include "core/pipeline/parameters.h"
+#include "core/pipeline/pipeline.h"
+#include "core/products/corrected_gsf.h"
+#include "core/sim/simulator.h"
+#include "server/scheduler/scheduler.h"
+#include "tests/integration/fresh_database.h"
+
+namespace bathyslam::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SchedulerFixture {
+  testing::FreshDatabase db;
+  storage::ConnectionPool pool{db.conninfo(), 4};
+  storage::SurveyStore surveys{pool};
+  storage::JobQueue jobs{pool};
+  storage::ResultStore results{pool};
+  fs::path scratch = fs::temp_directory_path() / ("scheduler_test_" + db.name() + "_" + std::to_string(getpid()));
+
+  SchedulerFixture() { fs::create_directories(scratch); }
+  ~SchedulerFixture() { fs::remove_all(scratch); }
+
+  // The small simulated survey as a bundle in the database, and the folder it was written to.
+  std::int64_t stored_survey(const fs::path& bundle) {
+    write_bundle(sim::simulate(sim::SimulationConfig{}).survey, bundle);
+    std::vector<storage::FileUpload> files;
+    for (const fs::directory_entry& entry : fs::directory_iterator(bundle)) {
+      std::ifstream in(entry.path(), std::ios::binary);
+      files.push_back({entry.path().filename().string(),
+                       storage::Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>())});
+    }
+    return surveys.create_survey(surveys.create_tenant("acme"), "small", files);
+  }
+
+  SchedulerOptions options() const {
+    SchedulerOptions o;
+    o.name = "test";
+    o.scratch = scratch;
+    return o;
+  }
+
+  // Runs the scheduler until `job` has finished, one way or the other (or 5 minutes passed).
+  storage::JobStatus run_until_finished(std::int64_t job) {
+    Scheduler scheduler(surveys, jobs, results, options());
+    scheduler.start();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+    storage::JobStatus status = jobs.status(job);
+    while ((status.state == storage::JobState::kQueued || status.state == storage::JobState::kRunning) &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      status = jobs.status(job);
+    }
+    scheduler.stop();
+    return status;
+  }
+};
+
+TEST(Scheduler, AQueuedJobIsRunAndItsResultsAreThoseOfTheSameRunOffline) {
+  SchedulerFixture f;
+  const fs::path bundle = f.scratch / "bundle";
+  const std::int64_t survey = f.stored_survey(bundle);
+  const PipelineConfig config = configuration_of("mchs", std::map<std::string, std::string>{});
+  const std::int64_t job = f.jobs.enqueue({survey, "mchs", parameters(config)});
+
+  const storage::JobStatus status = f.run_until_finished(job);
+  ASSERT_EQ(status.state, storage::JobState::kSucceeded) << status.error.value_or("");
+
+  const PipelineResult offline = run_pipeline(load_bundle(bundle), config);
+  const std::vector<Eigen::Isometry3d> stored = f.results.load_optimized_poses(job);
+  ASSERT_EQ(stored.size(), offline.optimized_poses.size());
+  for (std::size_t i = 0; i < stored.size(); ++i) {
+    EXPECT_LT((stored[i].translation() - offline.optimized_poses[i].translation()).norm(), 1e-6) << "submap " << i;
+  }
+  EXPECT_EQ(f.results.submap_poses(job).size(), offline.submaps.submaps.size());
+
+  const std::optional<storage::Report> report = f.results.load_report(job);
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->report.at("configuration"), "mchs");
+  EXPECT_LT(report->report.at("consistency_error_m").at("optimized").at("rmse").get<double>(),
+            report->report.at("consistency_error_m").at("dead_reckoning").at("rmse").get<double>());
+  EXPECT_FALSE(report->plots.empty());
+
+  ASSERT_TRUE(f.results.map_grid(job));
+  bool geotiff = false;
+  for (const storage::TileKey& key : f.results.tiles(job)) geotiff |= key.format == "geotiff";
+  EXPECT_TRUE(geotiff);
+  EXPECT_GT(f.results.file_size(job, kCorrectedGsfFile).value_or(0), 0);
+
+  // Watchers saw the stages go by, and the last word was "done".
+  const std::vector<storage::JobEvent> events = f.jobs.events(job);
+  ASSERT_FALSE(events.empty());
+  bool registered = false;
+  for (const storage::JobEvent& e : events) registered |= e.stage == "register";
+  EXPECT_TRUE(registered);
+  EXPECT_EQ(events.back().stage, "done");
+}
+
+TEST(Scheduler, AJobWhoseStoredParametersAreNotKnownFailsSayingWhichAndStoresNothing) {
+  SchedulerFixture f;
+  const std::int64_t survey = f.stored_survey(f.scratch / "bundle");
+  const std::int64_t job = f.jobs.enqueue({survey, "mchs", {{"registration.gicp.no_such_knob", 1.0}}});
+
+  const storage::JobStatus status = f.run_until_finished(job);
+  ASSERT_EQ(status.state, storage::JobState::kFailed);
+  EXPECT_EQ(status.attempts, 1) << "its own input's fault: not tried again";
+  ASSERT_TRUE(status.error);
+  EXPECT_NE(status.error->find("registration.gicp.no_such_knob"), std::string::npos) << *status.error;
+  EXPECT_FALSE(f.results.load_report(job));
+  EXPECT_TRUE(f.results.load_optimized_poses(job).empty());
+  EXPECT_TRUE(f.results.tiles(job).empty());
+}
+
+}  // namespace
+}  // namespace bathyslam::server
