@@ -11,6 +11,7 @@
 #include "bathyslam/v1/job.grpc.pb.h"
 #include "client/commands.h"
 #include "client/remote.h"
+#include "core/pipeline/parameters.h"
 #include "core/types/format.h"
 
 namespace bathyslam::cli {
@@ -33,11 +34,8 @@ void run_submit(const SubmitOptions& o) {
   v1::SubmitJobRequest request;
   request.set_survey_id(o.survey);
   request.set_configuration(o.config);
-  for (const std::string& kv : o.sets) {
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("--set expects key=value, got '" + kv + "'");
-    (*request.mutable_parameters())[kv.substr(0, eq)] = kv.substr(eq + 1);
-  }
+  // Parsed as `process` parses them; the server checks names and values (configuration_of).
+  for (const auto& [name, value] : overrides_of(o.sets)) (*request.mutable_parameters())[name] = value;
   v1::Job job;
   check("SubmitJob", v1::JobService::NewStub(o.remote.channel())->SubmitJob(o.remote.context(30).get(), request, &job));
   std::printf("job %lld %s\n", static_cast<long long>(job.id()), state_name(job.state()).c_str());

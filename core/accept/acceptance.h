@@ -97,10 +97,12 @@ struct QualityConfig {
   // information where doubt or an alias would widen it (docs/slam-every-seabed.md).
   bool doubt_widens = true;
   // Widening along a line of plausible competitors (resolve_alias) trusts dead reckoning to have
-  // ruled out every basin off the line. Where the best basin elsewhere fits nearly as well as the
-  // answer (Uniqueness::distinctness under this; 2 is an RMS misfit within 1.4x the answer's), the
-  // answer itself may be that basin's alias, and an estimate of the noise built from such
-  // answers is no evidence against it: the answer keeps no horizontal information. On `small`
+  // ruled out every basin off the line. Where the best other local minimum the probe found (on
+  // the line or off it, plausible or not) fits nearly as well as the answer
+  // (Uniqueness::distinctness under this; 2 is an RMS misfit within 1.4x the answer's), the
+  // answer itself may be an alias, and an estimate of the noise built from such answers is no
+  // evidence against it: the answer keeps no horizontal information. An answer whose every
+  // competitor dead reckoning rules out keeps its own information whatever this says. On `small`
   // sand waves and channels every edge off by more than 2 m that widening let through (without
   // direct_loops' reach test) had distinctness 0.47-1.41 (docs/slam-every-seabed.md). 0: not
   // checked.

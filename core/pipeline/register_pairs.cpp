@@ -48,7 +48,9 @@ Rejection unless_converged(const PairRegistration& reg) {
 // radius: had GICP stopped anywhere but the truth, the truth would be among the probe's
 // competitors there, and the answer would lose its position along them (resolve_alias). Without
 // it, GICP's own gate. Both use DR's covariance between the two submaps, not the batch's
-// corrected guess's, so they err long (direct_loops.reach_sigmas, off by default).
+// corrected guess's, so they err long (direct_loops.reach_sigmas, off by default); and the
+// radii follow the sounding footprint while Table 1's DR sigmas, before the survey's own are
+// estimated, do not.
 std::string direct_loop_reach(const CandidatePair& pair, const DrNoiseModel& dr, const PipelineConfig& config,
                               const Plan& plan) {
   if (!plan.direct_loops) return "direct loop closures off";

@@ -27,9 +27,10 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 // dead reckoning has chosen between them. When some do not, a feature-aided answer is refused
 // (as is one whose overlap was too small to probe) and a direct one keeps no horizontal
 // information, or with `widens` has the scatter of those it allows added to its covariance,
-// unless the best basin elsewhere fits nearly as well as the answer (distinctness under
-// `widen_min_distinctness`). `level_from_target` turns the target submap's frame, where the
-// offsets lie, into the edge's residual frame.
+// unless the best other local minimum in the probe fits nearly as well as the answer
+// (distinctness under `widen_min_distinctness`; 0 here, not checked, while the pipeline's
+// QualityConfig says 2). `level_from_target` turns the target submap's frame, where the offsets
+// lie, into the edge's residual frame.
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
                    bool widens = false, double widen_min_distinctness = 0);

@@ -387,9 +387,15 @@ struct UploadRow {
 };
 
 UploadRow upload_row_of(const Result& r) {
-  return {r.int64(0, r.column("id")),          r.int64(0, r.column("size_bytes")), r.int64(0, r.column("committed_bytes")),
-          r.int64(0, r.column("chunk_count")), r.boolean(0, r.column("complete")), r.boolean(0, r.column("finalized")),
-          r.bytes(0, r.column("sha256"))};
+  UploadRow row;
+  row.file_id = r.int64(0, "id");
+  row.size = r.int64(0, "size_bytes");
+  row.committed = r.int64(0, "committed_bytes");
+  row.chunks = r.int64(0, "chunk_count");
+  row.complete = r.boolean(0, "complete");
+  row.survey_finalized = r.boolean(0, "finalized");
+  row.sha256 = r.bytes(0, "sha256");
+  return row;
 }
 
 // The upload rules: a chunk continues a file that is neither complete nor in a finalized survey,
