@@ -8,17 +8,16 @@
 #include "client/commands.h"
 #include "client/survey_options.h"
 #include "core/fuse/fuse.h"
-#include "core/fuse/map_resolution.h"
 #include "core/fuse/soundings_csv.h"
 #include "core/io/bundle.h"
 #include "core/io/file_bytes.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/gsf/navigation_rewrite.h"
 #include "core/pipeline/corrected_navigation.h"
+#include "core/pipeline/job_input.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
-#include "core/pipeline/streamed_survey.h"
 #include "core/products/corrected_gsf.h"
 #include "core/products/map_products.h"
 
@@ -63,15 +62,10 @@ void run_process(const ProcessOptions& o) {
   config.threads = o.threads;
 
   const auto start = std::chrono::steady_clock::now();
-  // The soundings are never held whole: nothing reads them again but --export-gsf, which reads
-  // the input again (docs/performance.md).
-  PipelineInputs inputs(config.submaps);
-  const Survey survey = load_survey(o.survey.input(), inputs).survey;  // without its soundings
-  SubmapSet submaps = inputs.take_submaps();
-  const SweptArea swept = inputs.outlines().swept_area(survey.nav);
-  const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  FuseConfig fuse = o.fuse;
-  if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(swept, fuse.min_soundings);
+  // Nothing reads the soundings again but --export-gsf, which reads the input again.
+  JobInput input = read_job_input([&](PingSink& sink) { return load_survey(o.survey.input(), sink).survey; }, config, o.fuse);
+  const Survey& survey = input.survey;
+  const FuseConfig& fuse = input.fuse;
   std::string last_stage;
   const ProgressFn progress = [&](std::string_view stage, double fraction) {
     if (stage != last_stage) {
@@ -80,7 +74,7 @@ void run_process(const ProcessOptions& o) {
     }
     std::fprintf(stderr, "\r  %-10s %5.1f %%", std::string(stage).c_str(), 100.0 * fraction);
   };
-  const PipelineResult result = run_pipeline(std::move(submaps), read_seconds, config, progress);
+  const PipelineResult result = run_pipeline(std::move(input.submaps), input.read_seconds, config, progress);
   std::fprintf(stderr, "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

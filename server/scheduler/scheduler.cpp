@@ -6,12 +6,10 @@
 #include <mutex>
 #include <optional>
 
+#include "core/pipeline/job_input.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
-#include "core/fuse/map_extent.h"
-#include "core/fuse/map_resolution.h"
 #include "core/pipeline/report.h"
-#include "core/pipeline/streamed_survey.h"
 #include "core/products/corrected_gsf.h"
 #include "server/log.h"
 #include "server/scheduler/map_products.h"
@@ -225,29 +223,25 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     const PipelineConfig config = job_config(job, std::max(1, cores / std::max(1, options_.workers)));
     event("load", 0);
-    const auto load_start = Clock::now();
     std::optional<storage::StoredSurveyCopy> files;
-    retry_transient(name + ": loading the survey", options_.retry, cancel,
-                    [&] { files.emplace(surveys_, job.survey_id, options_.scratch); });
-    // The pings go straight into the submaps: the soundings are never held whole.
-    PipelineInputs inputs(config.submaps);
-    BundleReadResult bundle = files->read(inputs);
-    if (!bundle.survey) throw BundleError(std::move(bundle.problems));
-    const Survey& survey = *bundle.survey;  // without its soundings
-    // The map's cells follow the soundings' density (0.5 m for a vehicle near the seabed).
-    const FuseConfig fuse{.resolution_m = auto_map_resolution(inputs.outlines().swept_area(survey.nav), FuseConfig{}.min_soundings),
-                          .max_cells = options_.max_map_cells};
-    // Finalize checked this too; a survey finalized before the limit existed is checked here.
-    if (auto problem = map_extent_problem(map_extent(survey.nav, inputs.outlines().sounding_reach_m(), fuse.resolution_m),
-                                          fuse.resolution_m, options_.max_map_cells))
-      throw std::runtime_error(problem->to_string());
-    event("load", 1, std::to_string(inputs.outlines().pings()) + " pings");
+    const auto read = [&](PingSink& sink) {
+      retry_transient(name + ": loading the survey", options_.retry, cancel,
+                      [&] { files.emplace(surveys_, job.survey_id, options_.scratch); });
+      BundleReadResult bundle = files->read(sink);
+      if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+      return std::move(*bundle.survey);
+    };
+    // The map's extent: Finalize checked it too; a survey finalized before the limit existed is
+    // checked here.
+    JobInput input = read_job_input(read, config, FuseConfig{.resolution_m = 0, .max_cells = options_.max_map_cells});
+    const Survey& survey = input.survey;
+    event("load", 1, std::to_string(input.pings) + " pings");
 
     // Progress: every stage change, and within a stage at most every `progress_every`.
     std::string last_stage;
     auto last_event = Clock::now();
     const PipelineResult result = run_pipeline(
-        inputs.take_submaps(), seconds_since(load_start), config,
+        std::move(input.submaps), input.read_seconds, config,
         [&](std::string_view stage, double fraction) {
           if (stage == "done") return;  // the job is done once its results are stored
           if (stage == last_stage && fraction < 1 && Clock::now() - last_event < options_.progress_every) return;
@@ -258,12 +252,12 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         &cancel);
 
     event("map", 0, "fusing and tiling");
-    const MapProducts map = make_map_products(result, survey.metadata, fuse, options_.scratch);
+    const MapProducts map = make_map_products(result, survey.metadata, input.fuse, options_.scratch);
     event("map", 0.5, "writing the corrected GSF");
     const ScratchDir gsf_dir(options_.scratch, "gsf");
     // The corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
     std::optional<std::filesystem::path> gsf;
-    if (inputs.outlines().pings() > 0) {
+    if (input.pings > 0) {
       gsf = gsf_dir.path() / kCorrectedGsfFile;
       write_corrected_gsf(survey, result, *gsf, [&](PingSink& sink) { return files->read(sink); });
     }

@@ -14,7 +14,9 @@
 #include <set>
 #include <thread>
 
+#include "core/fuse/map_resolution.h"
 #include "core/io/bundle.h"
+#include "core/pipeline/job_input.h"
 #include "core/pipeline/corrected_navigation.h"
 #include "core/pipeline/streamed_survey.h"
 #include "core/products/map_products.h"
@@ -130,6 +132,36 @@ TEST(Pipeline, GicpRegistersAdjacentLinesDirectlyAndClosesNoLoops) {
   EXPECT_EQ(n.feature_aided, 0);
   EXPECT_EQ(n.direct, n.candidates);
   EXPECT_LT(r.consistency.stats.rmse, r.dr_consistency.stats.rmse);
+}
+
+// The first half of a job, as `process` and the scheduler both run it: the map's cell size from
+// the soundings' density, and a map larger than the limit refused before any work, naming the
+// navigation's extent.
+TEST(JobInput, ChoosesTheMapCellsFromTheSoundingsAndRefusesATooLargeMapBeforeAnyWork) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bathyslam_job_input";
+  std::filesystem::remove_all(dir);
+  write_bundle(small_survey(), dir);
+  const PipelineConfig config = preset_config(Configuration::kMchs);
+  const auto read = [&](PingSink& sink) {
+    BundleReadResult r = stream_bundle(dir, sink);
+    if (!r.survey) throw BundleError(std::move(r.problems));
+    return std::move(*r.survey);
+  };
+  const JobInput input = read_job_input(read, config, FuseConfig{.resolution_m = 0});
+  EXPECT_EQ(input.fuse.resolution_m, auto_map_resolution(small_survey(), FuseConfig{}.min_soundings));
+  EXPECT_EQ(input.pings, small_survey().pings.size());
+  EXPECT_EQ(input.submaps.submaps.size(), build_submaps(small_survey(), config.submaps).submaps.size());
+  EXPECT_TRUE(input.survey.beams.empty()) << "the soundings are not held";
+
+  const JobInput given = read_job_input(read, config, FuseConfig{.resolution_m = 2.0});
+  EXPECT_EQ(given.fuse.resolution_m, 2.0) << "a cell size the caller chose stays";
+  try {
+    read_job_input(read, config, FuseConfig{.resolution_m = 0, .max_cells = 1000});
+    ADD_FAILURE() << "a map of more than 1000 cells was not refused";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("nav.csv"), std::string::npos) << error.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 // `bathyslam process` and the service's jobs stream a bundle's pings into the submaps (and what
