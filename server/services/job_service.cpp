@@ -1,8 +1,8 @@
 #include "server/services/job_service.h"
 
 #include <charconv>
-#include <map>
 #include <chrono>
+#include <map>
 #include <thread>
 
 #include "core/pipeline/parameters.h"

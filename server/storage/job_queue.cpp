@@ -69,6 +69,15 @@ JobEvent job_event_from(const Result& rows, int row) {
   return e;
 }
 
+// The tenant's queued and running jobs, on a connection the caller may hold in a transaction.
+int active_jobs_of(Connection& connection, std::int64_t tenant_id) {
+  return static_cast<int>(connection
+                              .exec("SELECT count(*) AS active FROM jobs j JOIN surveys s ON s.id = j.survey_id"
+                                    " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
+                                    {tenant_id})
+                              .int64(0, "active"));
+}
+
 std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohmann::json& parameters) {
   // NOTIFY is delivered at commit, so a woken worker always finds the job.
   return connection
@@ -93,12 +102,7 @@ std::optional<std::int64_t> JobQueue::enqueue_within_limit(const NewJob& job, st
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   connection->exec("SELECT 1 FROM tenants WHERE id = $1 FOR UPDATE", {tenant_id});
-  const std::int64_t active = connection
-                                  ->exec("SELECT count(*) AS active FROM jobs j JOIN surveys s ON s.id = j.survey_id"
-                                         " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
-                                         {tenant_id})
-                                  .int64(0, "active");
-  if (active >= max_active) return std::nullopt;
+  if (active_jobs_of(*connection, tenant_id) >= max_active) return std::nullopt;
   const std::int64_t id = insert_job(*connection, job, parameters);
   transaction.commit();
   return id;
@@ -326,11 +330,7 @@ std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional
 
 int JobQueue::active_jobs(std::int64_t tenant_id) {
   auto connection = pool_.acquire();
-  return static_cast<int>(connection
-                              ->exec("SELECT count(*) AS active FROM jobs j JOIN surveys s ON s.id = j.survey_id"
-                                     " WHERE s.tenant_id = $1 AND j.state IN ('queued', 'running')",
-                                     {tenant_id})
-                              .int64(0, "active"));
+  return active_jobs_of(*connection, tenant_id);
 }
 
 std::vector<StoredJobEvent> JobQueue::events_after(std::int64_t job_id, std::int64_t after_event_id) {
