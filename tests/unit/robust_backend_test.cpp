@@ -417,6 +417,31 @@ TEST(DoubtWidens, AddsTheSpreadToTheAnswersOwnCovarianceEvenWhereItObservesOneDi
   EXPECT_NEAR(across.dot(diagonal.topLeftCorner<2, 2>() * across) / across.squaredNorm(), 100.0, 1e-9);
 }
 
+// Where the answer's own information is small in absolute terms (deep water: sigmas of a hundred
+// metres) and the competitors lie on one line oblique to the axes, the widened information is
+// still never more than the answer's own: at 1500 m the old form gave 8.8 per m² for 4e-5.
+TEST(DoubtWidens, NeverClaimsMoreThanTheAnswerItselfAtAnyScale) {
+  const double scale = 128;  // the footprint's, 1500 m against the lake's 10 m
+  Information6 own = information_from_sigmas({0.1 * scale * 12, 0.1 * scale * 18, 0.05 * scale}, {0.002, 0.002, 0.004});
+  own(0, 1) = own(1, 0) = -0.5 * std::sqrt(own(0, 0) * own(1, 1));
+  for (double angle : {0.0, 0.3, 0.98, 1.3}) {
+    const Eigen::Vector2d line(std::cos(angle), std::sin(angle));
+    const Eigen::Matrix2d spread = 461.5 * 461.5 * line * line.transpose();  // competitors on one line
+    const Information6 widened = with_horizontal_spread(own, spread);
+    const Eigen::Matrix2d excess = own.topLeftCorner<2, 2>() - widened.topLeftCorner<2, 2>();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> kept(widened.topLeftCorner<2, 2>());
+    EXPECT_GE(kept.eigenvalues().minCoeff(), -1e-12 * own(0, 0)) << angle;
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(excess).eigenvalues().minCoeff(), -1e-9 * own(0, 0)) << angle;
+    // Across the line nothing was added: the answer's own variance there (the marginal's).
+    const Eigen::Vector2d across(-line.y(), line.x());
+    const Eigen::Matrix2d own_covariance = own.topLeftCorner<2, 2>().inverse();
+    const Eigen::Matrix2d widened_covariance = own_covariance + spread;
+    EXPECT_NEAR(across.dot(widened.topLeftCorner<2, 2>() * across), across.dot(widened_covariance.inverse() * across),
+                1e-6 * own(0, 0))
+        << angle;
+  }
+}
+
 // The cost's valley oblique to the direction taken out (sand waves: GICP's valley runs along one
 // train's crests at 113 degrees, the probe's competitors along another's at 68): an answer that
 // slid 2 m down the valley must not pull the graph across the competitors' line. Projected out,
