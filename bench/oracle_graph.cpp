@@ -3,7 +3,7 @@
 // `mchs` best-quality information, and the graph is solved from dead reckoning as the pipeline
 // solves it. Registrations relate submaps to each other only, so whatever drift the survey's
 // geometry cannot see stays; this is the floor under any registration method's trajectory RMSE.
-//   bench_oracle_graph BUNDLE [--no-loops] [--edges REPORT] [--observable] [key=value ...]
+//   bench_oracle_graph BUNDLE [--no-loops] [--edges REPORT] [--observable [--identifiable]] [key=value ...]
 // --observable: the achievable floor on this seabed (issue 31). Each pair's true edge carries only
 // the information its overlap supports: the GICP cost's curvature at the truth, shaped and
 // weighed as `mchs` weighs a registration's (quality_information with information_from_hessian),
@@ -13,6 +13,13 @@
 // --edges takes the pairs from a report.json instead: its accepted registrations only, at the
 // truth, direct-path adjacent ones with depth, roll and pitch only, as `mchs` weighs them. This
 // separates what the front end got wrong from what the terrain never offered.
+// --identifiable (with --observable): what a method that judges each pair on its own overlap and
+// dead reckoning can reach. The truth is probed as a registration's answer is (the terrain slid
+// about it, register/uniqueness.h), and where another offset fits nearly as well and dead
+// reckoning (at the survey's noise, estimated as above) does not rule it out, the pair keeps no
+// more than `mchs`'s alias rule gives an answer there (resolve_alias): on a periodic seabed with
+// drift beyond half its wavelength, the true alignment is one of several that the pair alone cannot
+// tell apart. Only a joint choice over many pairs could do better.
 // key=value: pipeline parameters, e.g. graph.dr_sigma_rotation_rad.yaw=0.005.
 #include <cstdio>
 #include <exception>
@@ -24,6 +31,7 @@
 #include "core/eval/metrics.h"
 #include "core/io/bundle.h"
 #include "core/pipeline/pipeline.h"
+#include "core/pipeline/robust_backend.h"
 
 using namespace bathyslam;
 
@@ -43,8 +51,30 @@ PoseGraphEdge observed_edge(const std::vector<Eigen::Isometry3d>& reference, con
   return edge;
 }
 
+// The pair's true edge after the alias rule, as if a direct registration had answered the truth.
+PoseGraphEdge identifiable_edge(const PoseGraphEdge& observed, const TerrainGrid& target, const TerrainGrid& source,
+                                const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                                const PipelineConfig& config) {
+  Constraint c;
+  c.type = ConstraintType::kLoop;
+  c.from = observed.from;
+  c.to = observed.to;
+  c.measured = observed.measured;
+  c.anchor = observed.anchor;
+  c.information = observed.information;
+  c.path = RegistrationPath::kDirect;
+  c.uniqueness = probe_uniqueness(target, source, observed.measured, config.registration.uniqueness);
+  const Eigen::Matrix3d level_from_target = level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
+  resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility, level_from_target,
+                config.quality.doubt_widens, config.quality.widen_min_distinctness);
+  PoseGraphEdge edge = observed;
+  edge.information = c.information;
+  return edge;
+}
+
 int observable_floor(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& dr,
-                     const std::vector<Eigen::Isometry3d>& reference, PipelineConfig config, bool loops_on) {
+                     const std::vector<Eigen::Isometry3d>& reference, PipelineConfig config, bool loops_on,
+                     bool identifiable) {
   config.quality.information_from_hessian = true;
   const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr { return voxel_filter(set.submaps[i].points, config.voxel); };
   GicpCloudCache prepared(set.submaps.size(), filtered, config.registration.gicp);
@@ -62,6 +92,19 @@ int observable_floor(const SubmapSet& set, const std::vector<Eigen::Isometry3d>&
     if (carries_horizontal_information(e.information)) innovations.push_back(dr_innovation(e, any, dr));
   }
   const NavigationNoiseEstimate noise = estimate_navigation_noise(dr, innovations, config.graph, config.navigation_noise);
+  if (identifiable) {
+    std::vector<TerrainGrid> grids;
+    for (const Submap& s : set.submaps) grids.push_back(grid_terrain(s.points, config.grid));
+    const DrNoiseModel model(dr, noise.graph);
+    std::size_t kept = 0;
+    for (PoseGraphEdge& e : registrations) {
+      if (!carries_horizontal_information(e.information)) continue;
+      e = identifiable_edge(e, grids[e.from], grids[e.to], model, dr, config);
+      kept += carries_horizontal_information(e.information);
+    }
+    std::printf("%zu of %zu pairs with horizontal information keep it where dead reckoning rules out every alias\n", kept,
+                innovations.size());
+  }
   std::vector<PoseGraphEdge> edges = odometry_edges(
       dr, information_from_sigmas(noise.graph.dr_sigma_translation_m, noise.graph.dr_sigma_rotation_rad));
   edges.insert(edges.end(), registrations.begin(), registrations.end());
@@ -93,11 +136,13 @@ int main(int argc, char** argv) try {
   }
   PipelineConfig config;
   bool loops_on = true, observable = false;
+  bool identifiable = false;
   std::string report;
   for (int i = 2; i < argc; ++i) {
     const std::string kv = argv[i];
     if (kv == "--no-loops") { loops_on = false; continue; }
     if (kv == "--observable") { observable = true; continue; }
+    if (kv == "--identifiable") { observable = identifiable = true; continue; }
     if (kv == "--edges" && i + 1 < argc) { report = argv[++i]; continue; }
     set_parameter(config, kv);
   }
@@ -123,7 +168,7 @@ int main(int argc, char** argv) try {
       ++count;
     }
   };
-  if (observable) return observable_floor(set, dr, reference, config, loops_on);
+  if (observable) return observable_floor(set, dr, reference, config, loops_on, identifiable);
   if (report.empty()) {
     add(adjacent_line_candidates(set, reference, config.candidates), best, adjacent);
     if (loops_on) add(loop_candidates(set, reference, config.candidates), best, loops);

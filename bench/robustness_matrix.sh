@@ -8,7 +8,9 @@
 #                              [--seeds "1 2 3"] [--configs "odometry gicp mchs"] [--work DIR]
 #                              [--set "key=value ..."] [--tag NAME] [--floor] [--altitude M]
 # --floor adds a `floor` row per bundle: the observable floor (bench_oracle_graph --observable),
-# every candidate pair at the truth with the information its overlap supports. --altitude flies
+# every candidate pair at the truth with the information its overlap supports, and an
+# `identifiable` row: the same where dead reckoning rules out every alias of the truth
+# (bench_oracle_graph --identifiable). --altitude flies
 # the sonar that high, the world scaled with it (simulate --altitude; issue 38).
 # bench/matrix_summary.py turns the rows into means per terrain and drift with issue 31's checks.
 # Bundles go under DIR (default /tmp/bathyslam-robust) and are reused when present; each bundle
@@ -57,10 +59,13 @@ for terrain in $terrains; do
         reports+=("$config=$out/report.json")
       done
       if [[ $floor == 1 ]]; then
-        # The floor's figures in a report's shape, for robustness_rows.py.
-        "$oracle" "$bundle" --observable | awk '$1 == "floor" {printf "{\"trajectory_error_m\": {\"optimized\": {\"rmse\": %s}, \"aligned\": {\"optimized\": {\"rmse\": %s}}}, \"consistency_error_m\": {\"optimized\": {\"rmse\": %s, \"p99\": %s}}, \"timings_s\": {}}\n", $2, $3, $4, $5}' \
-          > "$bundle-floor.json"
-        reports+=("floor=$bundle-floor.json")
+        # The floors' figures in a report's shape, for robustness_rows.py.
+        for mode in observable identifiable; do
+          name=floor; [[ $mode == identifiable ]] && name=identifiable
+          "$oracle" "$bundle" --$mode | awk '$1 == "floor" {printf "{\"trajectory_error_m\": {\"optimized\": {\"rmse\": %s}, \"aligned\": {\"optimized\": {\"rmse\": %s}}}, \"consistency_error_m\": {\"optimized\": {\"rmse\": %s, \"p99\": %s}}, \"timings_s\": {}}\n", $2, $3, $4, $5}' \
+            > "$bundle-$name.json"
+          reports+=("$name=$bundle-$name.json")
+        done
       fi
       python3 bench/robustness_rows.py "$terrain" "$drift" "$seed" "${reports[@]}"
       [[ $keep == 1 ]] || rm -rf "$bundle"
