@@ -180,6 +180,19 @@ TEST_F(BundleTest, ANumberBeyondADoubleInSurveyJsonIsAProblemNotACrash) {
   EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: a number out of range"));
 }
 
+// "\u0000" is valid JSON, but no survey holding it could be stored (PostgreSQL's jsonb and text
+// refuse it): refused where it is parsed, in a key or a value at any depth.
+TEST(BoundedJson, AStringHoldingNulIsRefused) {
+  for (const char* text : {R"({"a": "\u0000"})", R"({"a": [{"b\u0000": 1}]})", R"(["x\u0000y"])"})
+    EXPECT_THROW(parse_bounded_json(text), JsonLimitError) << text;
+  EXPECT_EQ(parse_bounded_json(R"({"a": "\u0001"})")["a"], "\x01");  // other escapes stay valid
+}
+
+TEST_F(BundleTest, ANulInSurveyJsonIsAProblem) {
+  write_lines(kSurveyJsonFile, {R"({"name": "t\u0000", "crs": "EPSG:32651"})"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: a string holds \\u0000"));
+}
+
 TEST_F(BundleTest, ALineTooLongIsNamedAndEndsTheFile) {
   replace_line(kNavFile, 3, std::string(100000, '1'));
   replace_line(kPingsFile, 1, std::string(100000, 't'));
@@ -209,6 +222,16 @@ TEST(Printable, KeepsUtf8AndEscapesWhatIsNot) {
   EXPECT_EQ(printable("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a UTF-16 surrogate
   EXPECT_EQ(printable("\xf0\x9f\x8c\x8a"), "\xf0\x9f\x8c\x8a");  // U+1F30A, four bytes
   EXPECT_EQ(printable("\xe2\x82"), "\\xe2\\x82");            // cut short at the end
+}
+
+TEST(QuotedInput, QuotesAtMost64BytesAndSaysHowLongTheInputWas) {
+  EXPECT_EQ(quoted_input("nav.csv"), "'nav.csv'");
+  EXPECT_EQ(quoted_input(std::string("coll\0one", 8)), "'coll\\x00one'");
+  EXPECT_EQ(quoted_input(std::string(64, 'x')), "'" + std::string(64, 'x') + "'");
+  EXPECT_EQ(quoted_input(std::string(1'900'000, 'x')), "'" + std::string(64, 'x') + "\u2026' (1900000 bytes)");
+  // Cut before a UTF-8 sequence that the 64th byte falls inside, not through it.
+  const std::string accents = std::string(63, 'a') + "\xc3\xa9" + "tail";
+  EXPECT_EQ(quoted_input(accents), "'" + std::string(63, 'a') + "\u2026' (69 bytes)");
 }
 
 TEST_F(BundleTest, NavNanIsNamedWithLineAndColumn) {
