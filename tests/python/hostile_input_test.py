@@ -292,6 +292,23 @@ class HostileInputTableTest(unittest.TestCase):
                 self.assertNotRegex(error.details(), INTERNALS)
                 self.assertEqual(database_fingerprint(self.server.url, rows_where), before, "the database changed")
 
+    def test_the_log_has_one_line_per_event(self):
+        """Whatever a client sent (the table's cases again, among them a name that holds a log
+        line of its own), every line of the server's log is one event: it starts with its time,
+        no line is the forged one, and no terminal escape reaches the log."""
+        self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="log \u00e9t\u00e9"), timeout=30)
+        for case in self.cases():
+            try:
+                case.act(self)
+            except grpc.RpcError:
+                pass
+        lines = self.server.server_log().splitlines()
+        self.assertTrue(any("'log \u00e9t\u00e9'" in line for line in lines), "UTF-8 in a name is kept as it is")
+        for line in lines:
+            self.assertRegex(line, r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z ")
+            self.assertNotIn(FORGED_LINE, line[:len(FORGED_LINE)], "a name forged a log line")
+            self.assertNotIn("\x1b", line)
+
 
 class ConcurrentCreateTest(unittest.TestCase):
     """One name created by 12 clients at once: one survey, and every other call ALREADY_EXISTS
