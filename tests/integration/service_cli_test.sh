@@ -146,3 +146,12 @@ grep -q "UNAUTHENTICATED" "$work/revoked.err" || fail "$(cat "$work/revoked.err"
 BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs > /dev/null || fail "revoking one token revoked another"
 if "$BATHYSLAM_SERVER_BIN" token revoke --db "$url" --id "$id" 2> /dev/null; then fail "revoked twice"; fi
 echo "service cli: ok"
+# An expiry is more than 0 days: 0 is refused (it made a token that never expired); leaving the
+# option out is how to ask for one that never does.
+if "$BATHYSLAM_SERVER_BIN" token create --db "$url" --tenant other --expires-in-days 0 > /dev/null 2> "$work/zero.err"; then
+  fail "a token expiring in 0 days was issued"
+fi
+grep -q "leave the option out for a token that never expires" "$work/zero.err" || fail "$(cat "$work/zero.err")"
+half=$("$BATHYSLAM_SERVER_BIN" token create --db "$url" --tenant other --description "half a day" --expires-in-days 0.5)
+BATHYSLAM_TOKEN=$half "$BATHYSLAM" jobs > /dev/null || fail "a token valid for half a day was refused"
+"$BATHYSLAM_SERVER_BIN" token list --db "$url" --tenant other | grep "half a day$" | grep -q never && fail "0.5 days never expires"
