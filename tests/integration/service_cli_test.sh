@@ -82,6 +82,9 @@ gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the sur
 # (the DR survey as GSF differs), and the very file `process --export-gsf` writes for the same
 # bundle and configuration.
 "$BATHYSLAM" map "$job" --format gsf --out "$work/corrected.gsf" > /dev/null || fail "map --format gsf"
+# A file name without a folder is written where the command runs.
+(cd "$work" && "$BATHYSLAM" map "$job" --out here.tif > /dev/null 2> "$work/here.err") || fail "map --out here.tif: $(cat "$work/here.err")"
+cmp "$work/here.tif" "$work/map.tif" || fail "here.tif differs from map.tif"
 "$BATHYSLAM" inspect "$work/corrected.gsf" > "$work/corrected.txt" || fail "inspect: $(cat "$work/corrected.txt")"
 pings=$(awk '/^counts/ {print $2}' "$work/corrected.txt")
 [ "$pings" = "$(awk '/^counts/ {print $2}' <("$BATHYSLAM" inspect "$SMALL_BUNDLE"))" ] || fail "corrected.gsf: $pings pings"
