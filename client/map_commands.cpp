@@ -27,7 +27,8 @@ struct MapOptions {
 // Streams a download into `path`; returns its size.
 template <typename Reader>
 std::int64_t save(Reader& reader, const std::string& call, const std::filesystem::path& path) {
-  std::filesystem::create_directories(path.parent_path());
+  // "x.tif" has no folder to make (and create_directories("") throws): it goes where we are.
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   const std::filesystem::path partial = path.string() + ".partial";
   std::ofstream out(partial, std::ios::binary);
   v1::DataChunk chunk;

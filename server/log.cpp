@@ -5,6 +5,7 @@
 #include <mutex>
 #include <string>
 
+#include "core/io/problem.h"
 #include "core/types/format.h"
 
 namespace bathyslam::server {
@@ -18,9 +19,12 @@ void log(const char* format, ...) {
   va_start(args, format);
   std::vsnprintf(message, sizeof message, format, args);
   va_end(args);
+  // A line is one event: a newline or a terminal escape inside what a line quotes (a survey's
+  // name, a job's error) is written as \xNN, so that input cannot forge a line of its own.
+  const std::string line = printable(message);
   static std::mutex mutex;  // whole lines, even from several workers
   std::lock_guard lock(mutex);
-  std::fprintf(stderr, "%s.%03dZ %s\n", stamp.c_str(), static_cast<int>(millis % 1000), message);
+  std::fprintf(stderr, "%s.%03dZ %s\n", stamp.c_str(), static_cast<int>(millis % 1000), line.c_str());
 }
 
 }  // namespace bathyslam::server

@@ -4,6 +4,7 @@
 // date; `bathyslam-server token` issues an API token.
 #include <unistd.h>
 
+#include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -63,8 +64,18 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
 struct TokenOptions {
   std::string tenant, description, token;
   std::int64_t id = 0;
-  double expires_in_days = 0;  // 0: never
+  double expires_in_days = 0;  // 0: the option left out, never (a 0 given is refused)
 };
+
+// --expires-in-days: more than 0 and at most 100 years. 0 is refused rather than read as "never"
+// (issue_token's 0) or as "at once": leaving the option out says never, and revoke ends a token now.
+std::string expiry_days_problem(const std::string& text) {
+  double days = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), days);
+  if (error != std::errc() || end != text.data() + text.size() || !(days > 0 && days <= 36500))
+    return text + " is not a number of days in (0, 36500]; leave the option out for a token that never expires";
+  return "";
+}
 
 int create_token(const std::string& db, const TokenOptions& t) {
   if (t.tenant.empty()) {
@@ -282,8 +293,10 @@ int main(int argc, char** argv) {
   add_db_option(create);
   create->add_option("--tenant", t.tenant, "tenant name")->required();
   create->add_option("--description", t.description, "what the token is for");
-  create->add_option("--expires-in-days", t.expires_in_days, "refuse the token after this many days (default: never)")
-      ->check(CLI::Range(0.0, 36500.0));
+  create->add_option("--expires-in-days", t.expires_in_days,
+                     "refuse the token after this many days: more than 0 (fractions allowed), at most 36500; "
+                     "without it the token never expires")
+      ->check(CLI::Validator(expiry_days_problem, "DAYS in (0, 36500]"));
   CLI::App* revoke = token->add_subcommand("revoke", "revoke a token: it is refused from now on");
   add_db_option(revoke);
   revoke->add_option("--id", t.id, "the token's id, from token list");

@@ -23,7 +23,9 @@ class JsonLimitError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Throws JsonLimitError over a limit and nlohmann::json::parse_error for a syntax error.
+// Throws JsonLimitError over a limit, for a string or key holding U+0000 ("\u0000" is valid
+// JSON, but PostgreSQL's jsonb and text refuse it: the survey could not be stored), and
+// nlohmann::json::parse_error for a syntax error.
 nlohmann::json parse_bounded_json(std::string_view text, const JsonLimits& limits = {});
 
 }  // namespace bathyslam

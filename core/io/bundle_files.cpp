@@ -7,13 +7,17 @@
 #include <cpl_string.h>
 #include <cpl_vsi.h>
 
+#include "core/io/tar_members.h"
+
 namespace bathyslam {
 namespace {
 
-// A member of a tar, through GDAL's virtual file system.
+// A member of a tar, through GDAL's virtual file system, read up to its size and no further:
+// GDAL reads an empty member on into the headers after it, whose bytes are not the file's.
 class VsiSource : public ByteSource {
  public:
-  VsiSource(const std::string& path, std::string_view name, std::uint64_t offset) : file_(VSIFOpenL(path.c_str(), "rb")) {
+  VsiSource(const std::string& path, std::string_view name, std::uint64_t offset, std::uint64_t size)
+      : file_(VSIFOpenL(path.c_str(), "rb")), left_(size > offset ? size - offset : 0) {
     if (file_ == nullptr || VSIFSeekL(file_, offset, SEEK_SET) != 0) {
       if (file_ != nullptr) VSIFCloseL(file_);
       throw std::runtime_error(std::string(name) + ": cannot be read from the tar");
@@ -22,10 +26,15 @@ class VsiSource : public ByteSource {
   ~VsiSource() override { VSIFCloseL(file_); }
   VsiSource(const VsiSource&) = delete;
   VsiSource& operator=(const VsiSource&) = delete;
-  std::size_t read(char* buffer, std::size_t size) override { return VSIFReadL(buffer, 1, size, file_); }
+  std::size_t read(char* buffer, std::size_t size) override {
+    const std::size_t got = VSIFReadL(buffer, 1, static_cast<std::size_t>(std::min<std::uint64_t>(size, left_)), file_);
+    left_ -= got;
+    return got;
+  }
 
  private:
   VSILFILE* file_;
+  std::uint64_t left_;  // bytes of the member not read yet
 };
 
 // The folder inside a tar that holds survey.json ("" at the top).
@@ -59,6 +68,10 @@ BundleFiles::BundleFiles(const std::filesystem::path& bundle) : bundle_(bundle) 
   if (std::filesystem::is_directory(bundle)) return;
   if (!std::filesystem::exists(bundle)) throw std::runtime_error(bundle.string() + ": no such folder or tar");
   const std::string folder = folder_of_survey_json(bundle);
+  // Nothing is followed: a link's bytes are not in the tar, yet GDAL would offer some.
+  if (auto problem = tar_member_not_a_file(tar_members(bundle)))
+    throw std::runtime_error(bundle.string() + ": " + *problem +
+                             "; a bundle's tar holds files and folders only (tar --dereference stores what links point to)");
   tar_root_ = "/vsitar/" + bundle.string() + (folder.empty() ? "" : "/" + folder);
 }
 
@@ -81,7 +94,7 @@ std::uint64_t BundleFiles::size(std::string_view file) const {
 
 std::unique_ptr<ByteSource> BundleFiles::open(std::string_view file, std::uint64_t offset) const {
   if (tar_root_.empty()) return std::make_unique<FileSource>(bundle_ / file, offset);
-  return std::make_unique<VsiSource>(path_of(file), file, offset);
+  return std::make_unique<VsiSource>(path_of(file), file, offset, size(file));
 }
 
 }  // namespace bathyslam

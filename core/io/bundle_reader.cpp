@@ -17,12 +17,6 @@
 namespace bathyslam {
 namespace {
 
-std::string quoted(std::string_view text) {
-  constexpr std::size_t kMax = 80;
-  if (text.size() > kMax) return "'" + printable(text.substr(0, kMax)) + "...'";
-  return "'" + printable(text) + "'";
-}
-
 // Line (1-based) of the first occurrence of "key" in a JSON text, so a problem with a field of
 // survey.json can point at it; 1 when the key does not appear.
 std::size_t line_of_key(std::string_view text, std::string_view key) {
@@ -51,7 +45,7 @@ bool check_header(LineReader& lines, std::string_view file, std::string_view exp
   }
   if (header != expected) {
     problems.error(std::string(file), 1, "",
-                   "header is " + quoted(header) + "; expected exactly '" +
+                   "header is " + quoted_input(header) + "; expected exactly '" +
                        std::string(expected) + "'");
     return false;
   }
@@ -65,7 +59,7 @@ bool parse_field(std::string_view text, T& value, std::string_view file, std::si
   const NumberError error = parse_number(text, value);
   if (error == NumberError::kNone) return true;
   problems.error(std::string(file), line, std::string(column),
-                 std::string(describe(error)) + ": " + quoted(text));
+                 std::string(describe(error)) + ": " + quoted_input(text));
   return false;
 }
 

@@ -8,6 +8,8 @@
 
 #include <proj.h>
 
+#include "core/io/problem.h"
+
 namespace bathyslam {
 namespace {
 
@@ -36,13 +38,13 @@ bool is_epsg_code(std::string_view crs) {
 
 std::optional<std::string> crs_problem(std::string_view crs) {
   if (!is_epsg_code(crs)) {
-    return "'" + std::string(crs) + "' is not of the form EPSG:<code>";
+    return quoted_input(crs) + " is not of the form EPSG:<code>";
   }
   ProjContext context;
   PjPtr pj(proj_create(context.ctx, std::string(crs).c_str()));
-  if (!pj) return "'" + std::string(crs) + "' is not a CRS that PROJ knows";
+  if (!pj) return quoted_input(crs) + " is not a CRS that PROJ knows";
   if (proj_get_type(pj.get()) != PJ_TYPE_PROJECTED_CRS) {
-    return "'" + std::string(crs) + "' (" + proj_get_name(pj.get()) +
+    return quoted_input(crs) + " (" + proj_get_name(pj.get()) +
            ") is not a projected CRS; the map needs metric easting/northing";
   }
   return std::nullopt;

@@ -94,4 +94,12 @@ std::string printable(std::string_view text) {
   return out;
 }
 
+std::string quoted_input(std::string_view text) {
+  if (text.size() <= kQuotedBytes) return "'" + printable(text) + "'";
+  // Cut before a UTF-8 sequence rather than inside it (at most 3 continuation bytes back).
+  std::size_t cut = kQuotedBytes;
+  for (int back = 0; back < 3 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80; ++back) --cut;
+  return "'" + printable(text.substr(0, cut)) + "\u2026' (" + std::to_string(text.size()) + " bytes)";
+}
+
 }  // namespace bathyslam

@@ -47,4 +47,10 @@ class ProblemList {
 // a message every terminal, JSON encoder and database column can hold.
 std::string printable(std::string_view text);
 
+// How every message quotes a user's input: printable, between quotes, and at most the first
+// `kQuotedBytes` bytes of it followed by "…' (N bytes)", so that a 2 MB file name cannot make a
+// status trailer larger than gRPC's metadata limit, nor a log line of megabytes.
+inline constexpr std::size_t kQuotedBytes = 64;
+std::string quoted_input(std::string_view text);
+
 }  // namespace bathyslam

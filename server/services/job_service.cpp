@@ -73,8 +73,17 @@ void constraint_stats(const std::map<std::string, ConstraintCounts>& groups,
   }
 }
 
+// Core's messages quote a configuration, a parameter's name and its value whole; their text is
+// bounded here first (the longest parameter name has about 50 bytes, a number fewer).
+constexpr std::size_t kMaxParameterBytes = 128;
+
 // The effective configuration: the configuration's preset, then the overrides, each checked by name and range.
 PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
+  check_name("configuration", request.configuration(), kMaxParameterBytes);
+  for (const auto& [name, value] : request.parameters()) {
+    check_name("parameters", name, kMaxParameterBytes);
+    check_name("parameters[" + name + "]", value, kMaxParameterBytes);
+  }
   try {
     return configuration_of(request.configuration(),
                             std::map<std::string, std::string>(request.parameters().begin(), request.parameters().end()));

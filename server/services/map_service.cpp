@@ -25,6 +25,19 @@ std::string stored_format(v1::TileFormat format) {
   }
 }
 
+// The whole map's formats and the names the tiles table stores them under ("" for the corrected
+// GSF, which job_files holds); unspecified is the COG, as the API says. A value the API does not
+// define is refused, as GetTile refuses one, rather than answered with some map.
+std::string stored_map_format(v1::MapFormat format) {
+  switch (format) {
+    case v1::MAP_FORMAT_UNSPECIFIED:
+    case v1::COG: return "cog";
+    case v1::BAG: return "bag";
+    case v1::GSF: return "";
+    default: throw invalid("format", "COG, BAG or GSF, not " + std::to_string(static_cast<int>(format)));
+  }
+}
+
 std::optional<v1::TileFormat> api_format(const std::string& stored) {
   if (stored == "geotiff") return v1::GEOTIFF;
   if (stored == "openvdb") return v1::VDB;
@@ -136,13 +149,13 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
                                 grpc::ServerWriter<v1::DataChunk>* writer) {
   return handle("GetMap", call, [&] {
     const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
-    if (request->format() == v1::GSF) {
+    const std::string format = stored_map_format(request->format());
+    if (format.empty()) {
       const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
       if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
       stream_file(call, context_, job.id, kCorrectedGsfFile, *size, writer);
       return;
     }
-    const std::string format = request->format() == v1::BAG ? "bag" : "cog";
     auto data = context_.results.tile(job.id, {format, 0, 0, 0});
     if (!data) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + format + " map");
     stream(call, *data, writer);

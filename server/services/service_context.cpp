@@ -2,12 +2,27 @@
 
 #include <charconv>
 
+#include "core/io/problem.h"
 #include "server/log.h"
 
 namespace bathyslam::server {
 
 Refusal invalid(const std::string& field, const std::string& message) {
   return Refusal(grpc::StatusCode::INVALID_ARGUMENT, field + ": " + message);
+}
+
+void check_text(const std::string& field, std::string_view text) {
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw invalid(field, "holds a NUL byte (at byte " + std::to_string(nul) + "): " + quoted_input(text));
+}
+
+void check_name(const std::string& field, std::string_view name, std::size_t max_bytes) {
+  check_text(field, name);
+  if (name.size() > max_bytes)
+    throw invalid(field, "at most " + std::to_string(max_bytes) + " bytes, not " + std::to_string(name.size()) + ": " +
+                             quoted_input(name));
+  // printable() changes exactly the control characters and the bytes that are not UTF-8.
+  if (printable(name) != name) throw invalid(field, "must be UTF-8 without control characters: " + quoted_input(name));
 }
 
 std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call) {
@@ -50,9 +65,32 @@ std::int64_t page_token(const std::string& token) {
   std::int64_t id = 0;
   const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), id);
   if (error != std::errc() || end != token.data() + token.size() || id <= 0)
-    throw invalid("page_token", "'" + token + "' is not a token this server gave");
+    throw invalid("page_token", quoted_input(token) + " is not a token this server gave");
   return id;
 }
+
+namespace {
+
+// What a client may know of a database failure: its cause in words, never PostgreSQL's message
+// (it may name a socket path, a data file or a constraint) nor the SQL state.
+std::string database_cause(const storage::DatabaseError& error) {
+  const std::string& state = error.sqlstate();
+  if (state == "53300") return "every database connection is in use";
+  if (state.starts_with("53")) return "the database is out of resources";
+  if (state.starts_with("57P")) return "the database is shutting down or starting";
+  return "the database cannot be reached";
+}
+
+grpc::Status database_failure(const char* method, const storage::DatabaseError& error) {
+  log("%s: %s", method, error.what());
+  if (error.sqlstate() == "40001" || error.sqlstate() == "40P01")
+    return grpc::Status(grpc::StatusCode::ABORTED, "a concurrent change collided with this call; try it again");
+  if (error.transient())
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE, "database: " + database_cause(error) + "; try again later");
+  return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");
+}
+
+}  // namespace
 
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body) {
   try {
@@ -62,11 +100,10 @@ grpc::Status handle(const char* method, grpc::ServerContext* call, const std::fu
   } catch (const Refusal& refusal) {
     return grpc::Status(refusal.code(), refusal.what());
   } catch (const storage::DatabaseError& error) {
-    log("%s: database: %s", method, error.what());
-    return grpc::Status(grpc::StatusCode::UNAVAILABLE, std::string("database: ") + error.what());
+    return database_failure(method, error);
   } catch (const std::exception& error) {
     log("%s: %s", method, error.what());
-    return grpc::Status(grpc::StatusCode::INTERNAL, error.what());
+    return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");
   } catch (...) {  // gRPC's thread would end the process
     log("%s: unknown exception", method);
     return grpc::Status(grpc::StatusCode::INTERNAL, "unknown error");

@@ -5,6 +5,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include <grpcpp/grpcpp.h>
 
@@ -44,6 +45,18 @@ class Refusal : public std::runtime_error {
 // INVALID_ARGUMENT "field: message".
 Refusal invalid(const std::string& field, const std::string& message);
 
+// The longest survey name, in bytes: well under what PostgreSQL's unique index on names can
+// hold (about 2.7 kB a row), so that a long name is the client's error, not the database's.
+inline constexpr std::size_t kMaxNameBytes = 255;
+
+// Text a request carries that the server stores, looks up or passes on: refused with
+// INVALID_ARGUMENT naming `field` when it holds a NUL byte, which libpq and PostgreSQL would cut
+// it at (or refuse), so that "nav.csv\0x" never answers for "nav.csv".
+void check_text(const std::string& field, std::string_view text);
+// A name people read (a survey's, a parameter's): besides check_text, at most `max_bytes`, UTF-8,
+// and no control characters (a newline in a name would break every listing and log line it is in).
+void check_name(const std::string& field, std::string_view name, std::size_t max_bytes = kMaxNameBytes);
+
 // The tenant of the caller: `authorization: Bearer <token>` metadata, or the dev tenant.
 // UNAUTHENTICATED otherwise.
 std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call);
@@ -57,8 +70,10 @@ storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::
 int page_size(int requested);
 std::int64_t page_token(const std::string& token);
 
-// Runs a handler: Refusal becomes its status, a database failure UNAVAILABLE, anything else
-// INTERNAL (with its message, and logged); a call past its deadline DEADLINE_EXCEEDED.
+// Runs a handler: Refusal becomes its status; a transient database failure UNAVAILABLE (a lost
+// serialization race ABORTED), saying the cause in words; any other failure INTERNAL. Whatever
+// the server itself failed at is logged whole and never sent: SQL states, PostgreSQL's messages
+// and server paths stay in the log. A call past its deadline is DEADLINE_EXCEEDED.
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body);
 
 }  // namespace bathyslam::server

@@ -79,14 +79,15 @@ nlohmann::json to_json(const Problem& problem) {
 // upload is declared, so that a refused stream leaves nothing behind.
 void check_declaration(const v1::UploadFileRequest& message, const Limits& limits) {
   const std::string& name = message.file_name();
+  check_text("file_name", name);
   if (!storage::is_bundle_file(name))
-    throw invalid("file_name", "'" + name + "' is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
+    throw invalid("file_name", quoted_input(name) + " is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, or NAME.gsf)");
   if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
   if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
   if (message.offset() < 0) throw invalid("offset", "must not be negative");
   if (message.data().size() > kMaxChunkBytes) throw invalid("data", "a chunk holds at most 1 MiB");
   if (message.offset() + static_cast<std::int64_t>(message.data().size()) > message.size_bytes())
-    throw invalid("data", "'" + name + "' was declared " + std::to_string(message.size_bytes()) +
+    throw invalid("data", quoted_input(name) + " was declared " + std::to_string(message.size_bytes()) +
                               " bytes; this chunk would end at " +
                               std::to_string(message.offset() + static_cast<std::int64_t>(message.data().size())));
   if (message.size_bytes() > limits.max_file_bytes)
@@ -107,7 +108,7 @@ void check_first_offset(storage::SurveyStore& surveys, std::int64_t survey_id, c
   const std::int64_t committed = resumed ? existing->committed_bytes : 0;
   if (message.offset() != committed)
     throw Refusal(grpc::StatusCode::ABORTED, "offset: " + std::to_string(message.offset()) + " but " + std::to_string(committed) +
-                                                 " bytes of '" + message.file_name() + "' are committed; resume there");
+                                                 " bytes of " + quoted_input(message.file_name()) + " are committed; resume there");
 }
 
 // Later messages carry chunks of the same file: one that names another file or survey, changes
@@ -116,7 +117,7 @@ void check_continuation(const v1::UploadFileRequest& first, const v1::UploadFile
   if (message.survey_id() != 0 && message.survey_id() != first.survey_id())
     throw invalid("survey_id", "a stream uploads to one survey; a later message names survey " + std::to_string(message.survey_id()));
   if (!message.file_name().empty() && message.file_name() != first.file_name())
-    throw invalid("file_name", "a stream uploads one file; a later message names '" + message.file_name() + "'");
+    throw invalid("file_name", "a stream uploads one file; a later message names " + quoted_input(message.file_name()));
   if ((message.size_bytes() != 0 && message.size_bytes() != first.size_bytes()) ||
       (!message.sha256().empty() && message.sha256() != first.sha256()))
     throw invalid("size_bytes", "the declaration (size_bytes, sha256) is made once, in the first message");
@@ -146,16 +147,22 @@ grpc::Status SurveyService::CreateSurvey(grpc::ServerContext* call, const v1::Cr
   return handle("CreateSurvey", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
     if (request->name().empty()) throw invalid("name", "a survey needs a name");
+    check_name("name", request->name());
     if (!request->crs().empty())
       if (auto problem = crs_problem(request->crs())) throw invalid("crs", *problem);
     const nlohmann::json sonar = object_field("sonar_json", request->sonar_json());
     const nlohmann::json vehicle = object_field("vehicle_json", request->vehicle_json());
     const auto same_name = context_.surveys.list_surveys(tenant, 0, 1, request->name());
     if (!same_name.empty())
-      throw Refusal(grpc::StatusCode::ALREADY_EXISTS,
-                    "name: survey " + std::to_string(same_name.front().id) + " is named '" + request->name() + "' already");
-    const std::int64_t id = context_.surveys.create_survey(tenant, request->name(), request->crs(), sonar, vehicle);
-    log("survey %lld created: '%s'", static_cast<long long>(id), request->name().c_str());
+      throw Refusal(grpc::StatusCode::ALREADY_EXISTS, "name: survey " + std::to_string(same_name.front().id) + " is named " +
+                                                          quoted_input(request->name()) + " already");
+    std::int64_t id = 0;
+    try {  // another call may take the name between the look above and the insert
+      id = context_.surveys.create_survey(tenant, request->name(), request->crs(), sonar, vehicle);
+    } catch (const storage::SurveyNameTaken& taken) {
+      throw Refusal(grpc::StatusCode::ALREADY_EXISTS, taken.what());
+    }
+    log("survey %lld created: %s", static_cast<long long>(id), quoted_input(request->name()).c_str());
     describe(*context_.surveys.survey(id), true, reply);
   });
 }
@@ -187,7 +194,7 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
         append(message);
       }
       describe_upload(state, reply);
-      if (state.complete) log("survey %lld: '%s' uploaded, %lld bytes", static_cast<long long>(survey_id), name.c_str(),
+      if (state.complete) log("survey %lld: %s uploaded, %lld bytes", static_cast<long long>(survey_id), quoted_input(name).c_str(),
                               static_cast<long long>(state.size_bytes));
     } catch (const storage::UploadError& error) {
       throw upload_refusal(error);
@@ -199,8 +206,9 @@ grpc::Status SurveyService::GetUploadStatus(grpc::ServerContext* call, const v1:
                                             v1::UploadStatus* reply) {
   return handle("GetUploadStatus", call, [&] {
     owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
+    check_text("file_name", request->file_name());
     auto state = context_.surveys.upload_state(request->survey_id(), request->file_name());
-    if (!state) throw Refusal(grpc::StatusCode::NOT_FOUND, "file_name: no upload of '" + request->file_name() + "'");
+    if (!state) throw Refusal(grpc::StatusCode::NOT_FOUND, "file_name: no upload of " + quoted_input(request->file_name()));
     describe_upload(*state, reply);
   });
 }
@@ -229,7 +237,7 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     }
     if (bundle.survey && !survey.crs.empty() && bundle.survey->metadata.crs != survey.crs) {
       problems.push_back(to_json({Problem::Severity::kError, std::string(kSurveyJsonFile), 0, "crs",
-                                  "'" + bundle.survey->metadata.crs + "' but the survey was created with '" + survey.crs + "'"}));
+                                  quoted_input(bundle.survey->metadata.crs) + " but the survey was created with " + quoted_input(survey.crs)}));
       errors = true;
     }
     if (bundle.survey) {
@@ -281,7 +289,10 @@ grpc::Status SurveyService::ListSurveys(grpc::ServerContext* call, const v1::Lis
     const std::int64_t tenant = caller_tenant(context_, *call);
     const int size = page_size(request->page_size());
     std::optional<std::string> name;
-    if (!request->name().empty()) name = request->name();
+    if (!request->name().empty()) {
+      check_name("name", request->name());
+      name = request->name();
+    }
     // One more than asked: whether there is a next page.
     auto surveys = context_.surveys.list_surveys(tenant, page_token(request->page_token()), size + 1, name);
     const bool more = static_cast<int>(surveys.size()) > size;

@@ -54,6 +54,12 @@ bool DatabaseError::transient() const {
 
 Param::Param(double value) : value_(shortest(value)) {}
 
+std::string Param::text_value(std::string text) {
+  if (text.find('\0') != std::string::npos)
+    throw DatabaseError("22021", "a text parameter holds a NUL byte, which libpq would cut it at");
+  return text;
+}
+
 std::string float8_array(const double* values, std::size_t count) {
   std::string text = "{";
   for (std::size_t i = 0; i < count; ++i) {

@@ -40,8 +40,8 @@ class Param {
  public:
   Param(std::nullopt_t) {}
   Param(const char* text) : value_(text) {}
-  Param(std::string_view text) : value_(std::string(text)) {}
-  Param(std::string text) : value_(std::move(text)) {}
+  Param(std::string_view text) : value_(text_value(std::string(text))) {}
+  Param(std::string text) : value_(text_value(std::move(text))) {}
   Param(bool value) : value_(value ? "t" : "f") {}
   Param(double value);
   Param(const Bytes& bytes) : value_(std::string(bytes.begin(), bytes.end())), binary_(true) {}
@@ -57,6 +57,11 @@ class Param {
   bool binary() const { return binary_; }
 
  private:
+  // libpq takes text parameters as C strings and would cut one at a NUL byte, silently storing or
+  // looking up less than was given: such text throws DatabaseError 22021 (as PostgreSQL refuses
+  // a NUL in text). Services refuse it earlier, naming the field; this catches what they miss.
+  static std::string text_value(std::string text);
+
   std::optional<std::string> value_;  // nullopt: SQL NULL
   bool binary_ = false;
 };

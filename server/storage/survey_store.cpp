@@ -7,6 +7,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/io/problem.h"
+
 namespace bathyslam::storage {
 namespace {
 
@@ -316,7 +318,7 @@ std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::strin
                {tenant_id, name, crs, sonar.dump(), vehicle.dump()})
         .int64(0, "id");
   } catch (const DatabaseError& error) {
-    if (error.sqlstate() == "23505") throw std::invalid_argument("name: a survey named '" + name + "' exists already");
+    if (error.sqlstate() == "23505") throw SurveyNameTaken("name: a survey named " + quoted_input(name) + " exists already");
     throw;
   }
 }

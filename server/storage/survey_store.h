@@ -69,6 +69,13 @@ class UploadError : public std::runtime_error {
   Kind kind_;
 };
 
+// CreateSurvey's name is the tenant's already: another call took it first (a unique violation,
+// SQLSTATE 23505). A race between clients, not a database failure.
+class SurveyNameTaken : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 struct Validation {
   bool valid = false;
   nlohmann::json problems = nlohmann::json::array();
@@ -108,7 +115,7 @@ class SurveyStore {
   std::vector<StoredFile> files(std::int64_t survey_id);
 
   // An empty survey, its files to be uploaded one by one. Throws std::invalid_argument for an
-  // empty name or a name the tenant already uses.
+  // empty name, SurveyNameTaken for a name the tenant already uses.
   std::int64_t create_survey(std::int64_t tenant_id, const std::string& name, const std::string& crs,
                              const nlohmann::json& sonar, const nlohmann::json& vehicle);
   std::optional<SurveyRecord> survey(std::int64_t survey_id);

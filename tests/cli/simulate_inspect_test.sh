@@ -33,6 +33,20 @@ grep -q "nojson.tar: the tar holds no survey.json" "$work/err.txt"
 echo "not a tar" > "$work/text.tar"
 if "$BATHYSLAM" inspect "$work/text.tar" 2> "$work/err.txt"; then echo "inspect accepted a text file" >&2; exit 1; fi
 grep -q "text.tar: neither a folder nor a tar" "$work/err.txt"
+# Nothing in a tar is followed: a member that is a link has no bytes of its own in the tar
+# (GDAL would offer the headers after it), so a bundle with one is refused naming it.
+mkdir "$work/linked"
+cp "$work/s/survey.json" "$work/s/nav.csv" "$work/linked/"
+cp "$work/s/pings.csv" "$work/pings-elsewhere.csv"
+ln -s ../pings-elsewhere.csv "$work/linked/pings.csv"
+tar -cf "$work/symlink.tar" -C "$work" linked
+if "$BATHYSLAM" inspect "$work/symlink.tar" 2> "$work/err.txt"; then echo "inspect followed a symbolic link" >&2; exit 1; fi
+grep -q "symlink.tar: 'linked/pings.csv' is a symbolic link to '../pings-elsewhere.csv'" "$work/err.txt"
+rm "$work/linked/pings.csv"
+ln "$work/linked/nav.csv" "$work/linked/pings.csv"
+tar -cf "$work/hardlink.tar" -C "$work" linked
+if "$BATHYSLAM" inspect "$work/hardlink.tar" 2> "$work/err.txt"; then echo "inspect followed a hard link" >&2; exit 1; fi
+grep -Eq "hardlink.tar: 'linked/(nav|pings).csv' is a hard link to 'linked/(nav|pings).csv'" "$work/err.txt"
 
 # A bundle with a broken line: a non-zero exit and a message naming file, line and field.
 sed -i '5s/^\([^,]*\),[^,]*,/\1,oops,/' "$work/s/nav.csv"

@@ -45,6 +45,20 @@ TEST(Database, ValuesTravelAsParametersNeverAsSql) {
   EXPECT_TRUE(connection.exec("SELECT $1::text IS NULL", {std::nullopt}).boolean(0, 0));
 }
 
+// libpq would cut "nav.csv\0x" to "nav.csv": text with a NUL never reaches it.
+TEST(Database, TextWithANulByteIsRefusedNotCut) {
+  testing::FreshDatabase db(false);
+  Connection connection(db.conninfo());
+  const std::string cut("nav.csv\0x", 9);
+  try {
+    connection.exec("SELECT $1::text", {cut});
+    FAIL() << "text with a NUL byte was sent";
+  } catch (const DatabaseError& error) {
+    EXPECT_EQ(error.sqlstate(), "22021");
+  }
+  EXPECT_EQ(connection.exec("SELECT length($1::bytea)", {Bytes(cut.begin(), cut.end())}).int64(0, 0), 9);  // bytea carries NULs
+}
+
 TEST(Database, ErrorsCarryTheSqlState) {
   testing::FreshDatabase db(false);
   Connection connection(db.conninfo());

@@ -31,6 +31,17 @@ fi
 "$BATHYSLAM" upload "$work/small.tar" --name from-tar > "$work/tar2" 2> "$work/tar2.err" || fail "tar upload: $(cat "$work/tar2.err")"
 grep -q "resuming pings.csv at" "$work/tar2.err" || fail "tar upload did not resume: $(cat "$work/tar2.err")"
 grep -Eq "^survey [0-9]+ ready$" "$work/tar2" || fail "$(cat "$work/tar2")"
+# A tar whose pings.csv is a symbolic link is refused naming the member, before any call: its
+# bytes are not in the tar, and GDAL offered the headers after it, hashed but never sent.
+mkdir "$work/linked"
+cp "$SMALL_BUNDLE/survey.json" "$SMALL_BUNDLE/nav.csv" "$work/linked/"
+ln -s "../small.tar" "$work/linked/pings.csv"
+tar -cf "$work/linked.tar" -C "$work" linked
+if "$BATHYSLAM" upload "$work/linked.tar" --name linked > /dev/null 2> "$work/linked.err"; then
+  fail "a tar with a symbolic link was uploaded"
+fi
+grep -q "linked.tar: 'linked/pings.csv' is a symbolic link to '../small.tar'" "$work/linked.err" || fail "$(cat "$work/linked.err")"
+grep -q "'linked'" "$work/server.log" && fail "a survey was created for a refused tar"
 
 if "$BATHYSLAM" submit "$survey" --config gicp --set registration.gicp.max_iterations=0 2> "$work/bad.err"; then
   fail "an out-of-range parameter was accepted"
@@ -71,6 +82,9 @@ e=$(( ${col_row%_*} * 256 + 128 )) n=$(( ${col_row#*_} * 256 + 128 ))
 [ "$(find "$work/box" -name '*.tif' | wc -l)" -lt "$all" ] || fail "the box fetched every tile"
 "$BATHYSLAM" map "$job" --out "$work/map.tif" > /dev/null || fail "map"
 gdalinfo "$work/map.tif" | grep -q "LAYOUT=COG" || fail "map.tif is not a COG"
+# A file name without a folder is written where the command runs.
+(cd "$work" && "$BATHYSLAM" map "$job" --out here.tif > /dev/null 2> "$work/here.err") || fail "map --out here.tif: $(cat "$work/here.err")"
+cmp "$work/here.tif" "$work/map.tif" || fail "here.tif differs from map.tif"
 "$BATHYSLAM" map "$job" --format bag --out "$work/map.bag" > /dev/null || fail "map --format bag"
 gdalinfo "$work/map.bag" | grep -q "^Driver: BAG" || fail "map.bag is not a BAG"
 gdalinfo "$work/map.bag" | grep -q "UTM zone 51N" || fail "map.bag lacks the survey's CRS"
@@ -145,4 +159,13 @@ if BATHYSLAM_TOKEN=$ci "$BATHYSLAM" jobs 2> "$work/revoked.err"; then fail "a re
 grep -q "UNAUTHENTICATED" "$work/revoked.err" || fail "$(cat "$work/revoked.err")"
 BATHYSLAM_TOKEN=$token "$BATHYSLAM" jobs > /dev/null || fail "revoking one token revoked another"
 if "$BATHYSLAM_SERVER_BIN" token revoke --db "$url" --id "$id" 2> /dev/null; then fail "revoked twice"; fi
+# An expiry is more than 0 days: 0 is refused (it made a token that never expired); leaving the
+# option out is how to ask for one that never does.
+if "$BATHYSLAM_SERVER_BIN" token create --db "$url" --tenant other --expires-in-days 0 > /dev/null 2> "$work/zero.err"; then
+  fail "a token expiring in 0 days was issued"
+fi
+grep -q "leave the option out for a token that never expires" "$work/zero.err" || fail "$(cat "$work/zero.err")"
+half=$("$BATHYSLAM_SERVER_BIN" token create --db "$url" --tenant other --description "half a day" --expires-in-days 0.5)
+BATHYSLAM_TOKEN=$half "$BATHYSLAM" jobs > /dev/null || fail "a token valid for half a day was refused"
+"$BATHYSLAM_SERVER_BIN" token list --db "$url" --tenant other | grep "half a day$" | grep -q never && fail "0.5 days never expires"
 echo "service cli: ok"

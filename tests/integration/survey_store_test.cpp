@@ -177,6 +177,24 @@ TEST(SurveyStore, TheLatestValidationIsKept) {
   EXPECT_THROW(store.save_validation(survey, {true, nlohmann::json::object(), nullptr}), std::invalid_argument);
 }
 
+// Two CreateSurvey calls with one name can both pass the service's look-up; the second insert's
+// unique violation is the name being taken (ALREADY_EXISTS), not a failure of the database.
+TEST(SurveyStore, ANameTakenMeanwhileIsSaidSo) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t tenant = store.create_tenant("acme");
+  const nlohmann::json none = nlohmann::json::object();
+  store.create_survey(tenant, "lake", "", none, none);
+  try {
+    store.create_survey(tenant, "lake", "", none, none);
+    FAIL() << "a name was taken twice";
+  } catch (const SurveyNameTaken& taken) {
+    EXPECT_STREQ(taken.what(), "name: a survey named 'lake' exists already");
+  }
+  EXPECT_GT(store.create_survey(store.create_tenant("other"), "lake", "", none, none), 0);  // names are per tenant
+}
+
 // FinalizeSurvey reads the files, validates them, then saves: an upload landing in between must
 // not make a survey ready with content that was never validated.
 TEST(SurveyStore, AValidationOfFilesThatChangedMeanwhileIsNotSaved) {

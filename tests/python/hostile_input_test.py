@@ -7,7 +7,9 @@ diagnosis (survey_validations, which GetSurvey lists) and changes nothing else; 
 left out of the comparison for those cases, and the survey checked still UPLOADING. The same
 environment as service_api_test.py (set by ctest)."""
 import hashlib
+import re
 import unittest
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable
 
@@ -18,6 +20,12 @@ from service_api_test import Server, database_fingerprint, job_pb2, map_pb2, rea
 INVALID, NOT_FOUND = grpc.StatusCode.INVALID_ARGUMENT, grpc.StatusCode.NOT_FOUND
 ABORTED, PRECONDITION = grpc.StatusCode.ABORTED, grpc.StatusCode.FAILED_PRECONDITION
 DEEP = '{"a": ' + "[" * 100000 + "]" * 100000 + "}"  # about 200 KB, under the message limit
+FORGED_LINE = "2026-12-05T00:00:00.000Z survey 1 deleted"  # what a name with a newline could add to the log
+HUGE_NAME = "x" * 1_900_000  # echoed whole, it made a status trailer over gRPC's metadata limit
+# What a refusal quotes of a long input: its first 64 bytes and its size.
+HUGE_QUOTED = "'" + "x" * 64 + "…' \\(1900000 bytes\\)"
+# What no message to a client may hold: PostgreSQL's words or SQL state, a server path.
+INTERNALS = re.compile(r"database error|SQLSTATE|ERROR: |/tmp/|/var/|scratch|\.s\.PGSQL")
 
 
 def tiny_bundle(**replace):
@@ -147,6 +155,10 @@ class HostileInputTableTest(unittest.TestCase):
                  INVALID, f"survey_id: a stream uploads to one survey; a later message names survey {self.ready}"),
             Case("later message changes the size", lambda _: up(m(), m(**{**continuation, "size_bytes": 5}, data=b"x")), INVALID,
                  r"size_bytes: the declaration \(size_bytes, sha256\) is made once"),
+            Case("file name with a NUL", lambda _: up(m(file_name="nav.csv\0", offset=0)), INVALID,
+                 r"file_name: holds a NUL byte \(at byte 7\): 'nav.csv\\x00'"),
+            Case("file name of 1.9 MB", lambda _: up(m(file_name=HUGE_NAME, offset=0)), INVALID,
+                 "file_name: " + HUGE_QUOTED + " is not a survey file"),
             Case("survey.json over its limit", lambda _: up(m(file_name="survey.json", size_bytes=2 << 20, offset=0)), INVALID,
                  "size_bytes: survey.json is at most 1048576 bytes"),
         ]
@@ -154,6 +166,22 @@ class HostileInputTableTest(unittest.TestCase):
             Case("survey without a name", call(create, survey_pb2.CreateSurveyRequest()), INVALID, "name: a survey needs a name"),
             Case("survey name taken", call(create, survey_pb2.CreateSurveyRequest(name="ready")), grpc.StatusCode.ALREADY_EXISTS,
                  r"name: survey \d+ is named 'ready' already"),
+            Case("survey name of 2.7 kB", call(create, survey_pb2.CreateSurveyRequest(name="n" * 2700)), INVALID,
+                 "name: at most 255 bytes, not 2700: 'n{64}…' \\(2700 bytes\\)"),
+            Case("survey name with a NUL", call(create, survey_pb2.CreateSurveyRequest(name="coll\0one")), INVALID,
+                 r"name: holds a NUL byte \(at byte 4\): 'coll\\x00one'"),
+            Case("survey name with a newline",
+                 call(create, survey_pb2.CreateSurveyRequest(name="a\n" + FORGED_LINE)), INVALID,
+                 r"name: must be UTF-8 without control characters: 'a\\x0a2026"),
+            Case("survey name with an escape", call(create, survey_pb2.CreateSurveyRequest(name="red \x1b[31m")), INVALID,
+                 "name: must be UTF-8 without control characters"),
+            Case("listing by a name with a NUL", call(self.surveys.ListSurveys, survey_pb2.ListSurveysRequest(name="ready\0")),
+                 INVALID, "name: holds a NUL byte"),
+            Case("sonar_json with \\u0000", call(create, survey_pb2.CreateSurveyRequest(name="a", sonar_json='{"a": "\\u0000"}')),
+                 INVALID, "sonar_json: a string holds"),
+            Case("vehicle_json with \\u0000 in a nested key",
+                 call(create, survey_pb2.CreateSurveyRequest(name="a", vehicle_json='{"a": [{"b\\u0000": 1}]}')),
+                 INVALID, "vehicle_json: a string holds"),
             Case("geographic CRS", call(create, survey_pb2.CreateSurveyRequest(name="a", crs="EPSG:4326")), INVALID, "crs: "),
             Case("unknown CRS", call(create, survey_pb2.CreateSurveyRequest(name="a", crs="EPSG:999999")), INVALID, "crs: "),
             Case("sonar_json not JSON", call(create, survey_pb2.CreateSurveyRequest(name="a", sonar_json="{oops")), INVALID,
@@ -178,6 +206,9 @@ class HostileInputTableTest(unittest.TestCase):
                  r"parameters\[registration.gicp.neighbours\]: "),
             Case("parameter NaN", job_with(**{"registration.gicp.max_correspondence_m": "nan"}), INVALID,
                  r"parameters\[registration.gicp.max_correspondence_m\]: "),
+            Case("parameter name of 1.9 MB", job_with(**{HUGE_NAME: "1"}), INVALID, "parameters: at most 128 bytes"),
+            Case("configuration of 1.9 MB", call(submit, job_pb2.SubmitJobRequest(survey_id=self.ready, configuration=HUGE_NAME)),
+                 INVALID, "configuration: at most 128 bytes, not 1900000: " + HUGE_QUOTED),
             Case("parameter empty", job_with(**{"registration.gicp.neighbours": ""}), INVALID,
                  r"parameters\[registration.gicp.neighbours\]: "),
             Case("job on a survey not ready", call(submit, job_pb2.SubmitJobRequest(survey_id=self.uploading, configuration="mchs")),
@@ -196,6 +227,16 @@ class HostileInputTableTest(unittest.TestCase):
             Case("status of a file never uploaded",
                  call(self.surveys.GetUploadStatus, survey_pb2.GetUploadStatusRequest(survey_id=self.uploading, file_name="pings.csv")),
                  NOT_FOUND, "file_name: no upload of 'pings.csv'"),
+            Case("status of a file name with a NUL",
+                 call(self.surveys.GetUploadStatus, survey_pb2.GetUploadStatusRequest(survey_id=self.uploading, file_name="nav.csv\0")),
+                 INVALID, "file_name: holds a NUL byte"),
+            Case("status of a file name of 1.9 MB",
+                 call(self.surveys.GetUploadStatus, survey_pb2.GetUploadStatusRequest(survey_id=self.uploading, file_name=HUGE_NAME)),
+                 NOT_FOUND, "file_name: no upload of " + HUGE_QUOTED),
+            Case("forged page token of 1.9 MB", call(self.jobs.ListJobs, job_pb2.ListJobsRequest(page_token=HUGE_NAME)), INVALID,
+                 "page_token: " + HUGE_QUOTED + " is not a token this server gave"),
+            Case("CRS of 1.9 MB", call(create, survey_pb2.CreateSurveyRequest(name="a", crs=HUGE_NAME)), INVALID,
+                 "crs: " + HUGE_QUOTED + " is not of the form EPSG:<code>"),
             Case("delete another tenant's survey",
                  call(self.surveys.DeleteSurvey, survey_pb2.DeleteSurveyRequest(survey_id=self.ready), self.intruder),
                  NOT_FOUND, rf"survey_id: no survey {self.ready}"),
@@ -219,6 +260,8 @@ class HostileInputTableTest(unittest.TestCase):
              r"[\s\S]*survey\.json.*crs.*'EPSG:32652' but the survey was created with 'EPSG:32651'"),
             ("survey.json nested 100 000 deep", {"survey.json": ('{"name": "t", "crs": "EPSG:32651", "sonar": ' + DEEP + "}").encode()},
              r"[\s\S]*survey\.json: nested deeper than 64 levels"),
+            ("survey.json with \\u0000 in a name", {"survey.json": b'{"name": "t\\u0000", "crs": "EPSG:32651"}'},
+             r"[\s\S]*survey\.json: a string holds \\u0000"),
             ("survey.json with a number beyond a double", {"survey.json": b'{"name": "t", "crs": "EPSG:32651", "x": 6e524}'},
              r"[\s\S]*survey\.json"),
             ("a survey spanning 500 km", {"nav.csv": nav.replace(b"452040,4630000", b"952040,5130000", 1)},
@@ -246,7 +289,52 @@ class HostileInputTableTest(unittest.TestCase):
                 error = raised.exception
                 self.assertEqual(error.code(), case.code, error.details())
                 self.assertRegex(error.details(), "^" + case.message)
+                self.assertNotRegex(error.details(), INTERNALS)
                 self.assertEqual(database_fingerprint(self.server.url, rows_where), before, "the database changed")
+
+    def test_the_log_has_one_line_per_event(self):
+        """Whatever a client sent (the table's cases again, among them a name that holds a log
+        line of its own), every line of the server's log is one event: it starts with its time,
+        no line is the forged one, and no terminal escape reaches the log."""
+        self.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="log \u00e9t\u00e9"), timeout=30)
+        for case in self.cases():
+            try:
+                case.act(self)
+            except grpc.RpcError:
+                pass
+        lines = self.server.server_log().splitlines()
+        self.assertTrue(any("'log \u00e9t\u00e9'" in line for line in lines), "UTF-8 in a name is kept as it is")
+        for line in lines:
+            self.assertRegex(line, r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z ")
+            self.assertNotIn(FORGED_LINE, line[:len(FORGED_LINE)], "a name forged a log line")
+            self.assertNotIn("\x1b", line)
+
+
+class ConcurrentCreateTest(unittest.TestCase):
+    """One name created by 12 clients at once: one survey, and every other call ALREADY_EXISTS
+    naming the field, whichever of the look-up or the unique index refused it."""
+
+    def test_one_name_created_by_twelve_clients_at_once(self):
+        server = Server()
+        self.addCleanup(server.stop)
+
+        def create(name):
+            try:
+                server.surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name=name), timeout=60)
+                return "OK", ""
+            except grpc.RpcError as error:
+                return error.code().name, error.details()
+
+        with ThreadPoolExecutor(12) as pool:
+            for round in range(8):  # the race is won differently each time
+                outcomes = list(pool.map(create, [f"race {round}"] * 12))
+                codes = [code for code, _ in outcomes]
+                self.assertEqual(codes.count("OK"), 1, outcomes)
+                for code, details in outcomes:
+                    if code != "OK":
+                        self.assertEqual(code, "ALREADY_EXISTS", details)
+                        self.assertRegex(details, rf"^name: .*'race {round}'")
+                        self.assertNotRegex(details, INTERNALS)
 
 
 if __name__ == "__main__":

@@ -316,6 +316,10 @@ class ServiceApiTest(unittest.TestCase):
                          map_pb2.GetTileRequest(job_id=job.id, level=99, col=0, row=0, format=map_pb2.GEOTIFF))
         self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetTile(r, **kw)),
                          map_pb2.GetTileRequest(job_id=job.id, level=0, col=0, row=0))
+        for unknown in (7, -1):  # a format the API does not define is refused, not answered with the COG
+            details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetMap(r, **kw)),
+                                       map_pb2.GetMapRequest(job_id=job.id, format=unknown))
+            self.assertEqual(details, f"format: COG, BAG or GSF, not {unknown}")
 
         # Deleting the survey deletes its jobs and results.
         self.surveys.DeleteSurvey(survey_pb2.DeleteSurveyRequest(survey_id=survey_id), timeout=30)

@@ -1,8 +1,12 @@
 #include "core/io/bundle.h"
+#include "core/io/bundle_files.h"
+#include "core/io/tar_members.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -180,6 +184,19 @@ TEST_F(BundleTest, ANumberBeyondADoubleInSurveyJsonIsAProblemNotACrash) {
   EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: a number out of range"));
 }
 
+// "\u0000" is valid JSON, but no survey holding it could be stored (PostgreSQL's jsonb and text
+// refuse it): refused where it is parsed, in a key or a value at any depth.
+TEST(BoundedJson, AStringHoldingNulIsRefused) {
+  for (const char* text : {R"({"a": "\u0000"})", R"({"a": [{"b\u0000": 1}]})", R"(["x\u0000y"])"})
+    EXPECT_THROW(parse_bounded_json(text), JsonLimitError) << text;
+  EXPECT_EQ(parse_bounded_json(R"({"a": "\u0001"})")["a"], "\x01");  // other escapes stay valid
+}
+
+TEST_F(BundleTest, ANulInSurveyJsonIsAProblem) {
+  write_lines(kSurveyJsonFile, {R"({"name": "t\u0000", "crs": "EPSG:32651"})"});
+  EXPECT_THAT(expect_rejected(), HasSubstr("survey.json: a string holds \\u0000"));
+}
+
 TEST_F(BundleTest, ALineTooLongIsNamedAndEndsTheFile) {
   replace_line(kNavFile, 3, std::string(100000, '1'));
   replace_line(kPingsFile, 1, std::string(100000, 't'));
@@ -209,6 +226,79 @@ TEST(Printable, KeepsUtf8AndEscapesWhatIsNot) {
   EXPECT_EQ(printable("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a UTF-16 surrogate
   EXPECT_EQ(printable("\xf0\x9f\x8c\x8a"), "\xf0\x9f\x8c\x8a");  // U+1F30A, four bytes
   EXPECT_EQ(printable("\xe2\x82"), "\\xe2\\x82");            // cut short at the end
+}
+
+TEST(QuotedInput, QuotesAtMost64BytesAndSaysHowLongTheInputWas) {
+  EXPECT_EQ(quoted_input("nav.csv"), "'nav.csv'");
+  EXPECT_EQ(quoted_input(std::string("coll\0one", 8)), "'coll\\x00one'");
+  EXPECT_EQ(quoted_input(std::string(64, 'x')), "'" + std::string(64, 'x') + "'");
+  EXPECT_EQ(quoted_input(std::string(1'900'000, 'x')), "'" + std::string(64, 'x') + "\u2026' (1900000 bytes)");
+  // Cut before a UTF-8 sequence that the 64th byte falls inside, not through it.
+  const std::string accents = std::string(63, 'a') + "\xc3\xa9" + "tail";
+  EXPECT_EQ(quoted_input(accents), "'" + std::string(63, 'a') + "\u2026' (69 bytes)");
+}
+
+// A tar of the test's bundle folder as GNU tar makes it (`options` before the file list), the
+// folder changed first by `prepare`.
+class TarBundleTest : public BundleTest {
+ protected:
+  fs::path tar_of_bundle(const std::string& options = "") {
+    const fs::path tar = dir_.string() + ".tar";
+    const std::string command = "tar " + options + " -cf '" + tar.string() + "' -C '" + dir_.parent_path().string() + "' '" +
+                                dir_.filename().string() + "'";
+    EXPECT_EQ(std::system(command.c_str()), 0) << command;
+    return tar;
+  }
+  std::string refusal_of(const fs::path& tar) {
+    try {
+      BundleFiles files(tar);
+    } catch (const std::runtime_error& error) {
+      return error.what();
+    }
+    return "accepted";
+  }
+  void TearDown() override {
+    fs::remove(dir_.string() + ".tar");
+    BundleTest::TearDown();
+  }
+};
+
+TEST_F(TarBundleTest, AMemberThatIsASymbolicLinkIsRefusedNamingIt) {
+  fs::remove(dir_ / kPingsFile);
+  fs::create_symlink("/etc/hostname", dir_ / kPingsFile);
+  const std::string member = dir_.filename().string() + "/pings.csv";
+  EXPECT_THAT(refusal_of(tar_of_bundle()), HasSubstr("'" + member + "' is a symbolic link to '/etc/hostname'"));
+}
+
+TEST_F(TarBundleTest, AMemberThatIsAHardLinkIsRefusedNamingIt) {
+  fs::remove(dir_ / kReferenceNavFile);
+  fs::create_hard_link(dir_ / kNavFile, dir_ / kReferenceNavFile);
+  EXPECT_THAT(refusal_of(tar_of_bundle()), HasSubstr("is a hard link to"));
+}
+
+TEST_F(TarBundleTest, LongNamesAndLinksAreReadInEveryFormat) {
+  // Paths over ustar's 100-byte name field: a prefix field in ustar, a long-name header in GNU's
+  // format, a "path" record in pax.
+  const std::string folder(80, 'f');
+  fs::create_directory(dir_ / folder);
+  fs::create_symlink(std::string(90, 't'), dir_ / folder / "link");
+  for (const std::string format : {"gnu", "pax", "ustar"}) {
+    const std::vector<TarMember> members = tar_members(tar_of_bundle("--format=" + format));
+    const auto link = std::find_if(members.begin(), members.end(), [](const TarMember& m) { return m.type == '2'; });
+    ASSERT_NE(link, members.end()) << format;
+    EXPECT_EQ(link->name, dir_.filename().string() + "/" + folder + "/link") << format;
+    EXPECT_EQ(link->link, std::string(90, 't')) << format;
+    EXPECT_EQ(std::count_if(members.begin(), members.end(), [](const TarMember& m) { return m.type == '0'; }), 4) << format;
+  }
+}
+
+TEST_F(TarBundleTest, AnEmptyMemberReadsAsNoBytes) {
+  write_lines(kReferenceNavFile, {});
+  const BundleFiles files(tar_of_bundle());
+  ASSERT_EQ(files.size(kReferenceNavFile), 0u);
+  char buffer[1024];
+  EXPECT_EQ(files.open(kReferenceNavFile)->read(buffer, sizeof buffer), 0u) << "the tar's next header read as the file";
+  EXPECT_EQ(read_at_most(*files.open(kNavFile), 1 << 20).size(), files.size(kNavFile));
 }
 
 TEST_F(BundleTest, NavNanIsNamedWithLineAndColumn) {
