@@ -172,9 +172,27 @@ PairRegistration with_switch_decision(PairRegistration r, const CoarseStart& c) 
 PairRegistration register_from_start(const CoarseStart& c, const PairClouds& clouds,
                                      const SubmapFeatures& target_features, const SubmapFeatures& source_features,
                                      const CoarseToFineConfig& config, bool with_hessian) {
-  PairRegistration r =
-      with_switch_decision(register_direct(clouds, c.start, c.gicp, config.crop_margin_m, with_hessian), c);
-  r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
+  const auto from = [&](const Eigen::Isometry3d& start) {
+    PairRegistration r = with_switch_decision(register_direct(clouds, start, c.gicp, config.crop_margin_m, with_hessian), c);
+    r.uniqueness = probe_uniqueness(target_features.grid, source_features.grid, r.registration.source_to_target, config.uniqueness);
+    return r;
+  };
+  PairRegistration r = from(c.start);
+  if (c.path != RegistrationPath::kDirect) return r;
+  const auto fits_better_elsewhere = [&](const Uniqueness& u) {
+    return u.probed && u.distinctness() < config.restart_below_distinctness &&
+           u.cost_at_answer_m2 <= config.restart_max_answer_share * u.typical_cost_m2;
+  };
+  for (int k = 0; k < config.best_basin_restarts && fits_better_elsewhere(r.uniqueness); ++k) {
+    Eigen::Isometry3d start = r.registration.source_to_target;
+    start.pretranslate(Eigen::Vector3d(r.uniqueness.alternative_offset_m.x(), r.uniqueness.alternative_offset_m.y(), 0));
+    PairRegistration again = from(start);
+    if (!again.registration.quality.converged || !again.uniqueness.probed ||
+        !(again.uniqueness.cost_at_answer_m2 < r.uniqueness.cost_at_answer_m2)) {
+      break;
+    }
+    r = std::move(again);
+  }
   return r;
 }
 

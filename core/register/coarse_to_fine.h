@@ -56,6 +56,23 @@ struct CoarseToFineConfig {
   // a few centimetres and a tenth of a degree instead of Table 1's ~0.2 m and ~0.8 deg
   // (gicp_test.cpp). 0: refine exactly as the direct path registers.
   double feature_refine_correspondence_m = 1.0;
+  // The direct path starts GICP at dead reckoning's guess and stops in the basin it starts in; on
+  // a periodic seabed a guess more than half a wavelength off is a neighbouring trough. Where the
+  // uniqueness probe about the answer finds another basin that fits clearly better (distinctness
+  // under `restart_below_distinctness`), GICP starts again there, and the better-fitting answer
+  // is kept, up to `best_basin_restarts` times. Which of several troughs is the truth is still
+  // judged as before (alias rule, DR gate, PCM). 0 restarts: the answer from the guess stands.
+  int best_basin_restarts = 2;
+  // 0.5: the other basin's RMS misfit under 0.7x the answer's, the mirror of
+  // quality.widen_min_distinctness. At 1, sounding noise alone sends half the answers on a
+  // featureless bottom elsewhere, and their depth, roll and pitch then come from the wrong place.
+  double restart_below_distinctness = 0.5;
+  // And only from an answer that sits in a basin of the terrain: its misfit at most this share of
+  // the typical offset's (Uniqueness::typical_cost_m2). Where the answer fits no better than a
+  // random offset (a flat bottom, an overlap the drift within the submaps has bent), a better
+  // fit elsewhere is noise, and moving there took depth, roll and pitch from 15-30 m away
+  // (`small` flat and sand waves).
+  double restart_max_answer_share = 0.25;
   template <typename Field>
   void fields(Field&& field) {
     nested("switching", switching, field);
@@ -65,6 +82,9 @@ struct CoarseToFineConfig {
     field("crop_margin_m", crop_margin_m, 0, 1e5);
     nested("uniqueness", uniqueness, field);
     field("feature_refine_correspondence_m", feature_refine_correspondence_m, 0, 1e5);
+    field("best_basin_restarts", best_basin_restarts, 0, 10);
+    field("restart_below_distinctness", restart_below_distinctness, 0, 1);
+    field("restart_max_answer_share", restart_max_answer_share, 0, 1);
   }
 };
 

@@ -144,6 +144,41 @@ TEST(LoopClosure, TwoDifferentPlacesOfSimilarRoughnessAreRejected) {
   EXPECT_TRUE(rejection_of(r, claimed, {}, true).rejected()) << "accepted: " << r.why << ", inliers " << r.inlier_ratio;
 }
 
+// Sand waves 6 m apart, 1.2 m crest to trough, with a few low mounds on them, and dead reckoning
+// 4 m off across the crests: GICP from the guess settles in the neighbouring trough, 6 m from
+// the truth. The probe about that answer finds the true basin fitting better (the mounds fit only
+// there), and GICP started again there lands on the truth.
+TEST(DirectRegistration, StartsAgainInTheBasinThatFitsBetterOnAPeriodicSeabed) {
+  SyntheticTerrain mounds = SyntheticTerrain::with_mounds(51, 5);
+  for (double& h : mounds.heights) h *= 0.25;  // 0.2-0.4 m: the waves are the relief, the mounds tell troughs apart
+  const auto sample = [&](const Eigen::Isometry3d& frame, uint64_t seed) {
+    std::vector<Eigen::Vector3f> points = mounds.sample(frame, 0.02, seed);
+    for (Eigen::Vector3f& p : points) {
+      const Eigen::Vector3d world = frame * p.cast<double>();
+      const double waves = 0.6 * std::sin(2 * M_PI * world.x() / 6.0);  // up
+      p = (frame.inverse() * Eigen::Vector3d(world.x(), world.y(), world.z() - waves)).cast<float>();
+    }
+    return points;
+  };
+  const Eigen::Isometry3d truth = planar_pose(0, 0, 0), guess = planar_pose(4.0, 0, 0);
+  Submap a, b;
+  a.points = sample(Eigen::Isometry3d::Identity(), 5);
+  b.points = sample(truth, 6);
+  CoarseToFineConfig config;
+  config.switching.min_feature_density = 1;  // the direct path, whatever the mounds offer
+  const SubmapFeatures target_features = extract_features(a, {}, {}), source_features = extract_features(b, {}, {});
+  const OneOffPair pair = one_off_pair(*voxel_filter(a.points), *voxel_filter(b.points), config.gicp);
+  const auto error_m = [&](const CoarseToFineConfig& c) {
+    const PairRegistration r = register_coarse_to_fine(pair.clouds, target_features, source_features, guess, c, 1);
+    EXPECT_EQ(r.path, RegistrationPath::kDirect);
+    return (truth.inverse() * r.registration.source_to_target).translation().head<2>().norm();
+  };
+  CoarseToFineConfig from_guess_only = config;
+  from_guess_only.best_basin_restarts = 0;
+  EXPECT_GT(error_m(from_guess_only), 3.0) << "GICP from the guess: the neighbouring trough";
+  EXPECT_LT(error_m(config), 0.3);
+}
+
 TEST(DirectRegistration, ASliverOfOverlapIsRefusedNotRegistered) {
   const SyntheticTerrain rough = SyntheticTerrain::with_mounds(41);
   const TerrainPair p = pair_of(rough, rough, planar_pose(0, 0, 0));
