@@ -9,7 +9,7 @@ out=$1/fuzz-bundle
 seconds=${2:-60}
 mkdir -p "$out/corpus" "$out/new"
 sources=(core/io/bundle_reader.cpp core/io/csv.cpp core/io/byte_source.cpp core/io/bounded_json.cpp core/io/problem.cpp
-         core/io/crs.cpp core/io/bundle_files.cpp)
+         core/io/crs.cpp core/io/bundle_files.cpp core/io/tar_members.cpp)
 clang++ -std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I"$root" -I/usr/include/gdal \
   "$root/tests/fuzz/bundle_reader_fuzz.cpp" "${sources[@]/#/$root/}" -lproj -lgdal -o "$out/bundle_reader_fuzz"
 cp -rn "$root"/tests/fuzz/bundle_corpus/* "$out/corpus/"
