@@ -151,7 +151,8 @@ struct CoarseStart {
 CoarseStart coarse_start(const SubmapFeatures& target_features, const SubmapFeatures& source_features,
                          const Eigen::Isometry3d& guess, const CoarseToFineConfig& config, uint64_t seed);
 
-// The fine half: GICP from the coarse start, with the uniqueness probe about its answer.
+// The fine half: GICP from the coarse start, with the uniqueness probe about its answer; on the
+// direct path, GICP again from a basin the probe finds fitting clearly better (best_basin_restarts).
 PairRegistration register_from_start(const CoarseStart& coarse, const PairClouds& clouds,
                                      const SubmapFeatures& target_features, const SubmapFeatures& source_features,
                                      const CoarseToFineConfig& config, bool with_hessian = false);
