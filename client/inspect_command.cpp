@@ -30,10 +30,10 @@ void inspect_bundle(const std::string& bundle, bool json) {
   else std::printf("%s", to_text(summary).c_str());
 }
 
-// GSF: what each file holds (pings, ignored pings, rejected beams, records), then the survey
-// bathyslam makes of them, its pings outlined as they are read (memory: the navigation and each
-// ping's outline, not the beams).
-void inspect_gsf(const InspectOptions& o) {
+// Sonar files: what each file holds (pings, rejected beams, records or datagrams), then the
+// survey bathyslam makes of them, its pings outlined as they are read (memory: the navigation and
+// each ping's outline, not the beams).
+void inspect_sonar_files(const InspectOptions& o) {
   PingOutlines outlines;
   LoadedSurvey loaded = load_survey(o.survey.input(), outlines);
   loaded.survey.pings = outlines.pings_without_beams();
@@ -41,22 +41,25 @@ void inspect_gsf(const InspectOptions& o) {
   if (o.json) {
     nlohmann::json files = nlohmann::json::array();
     for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));
-    std::printf("%s\n", nlohmann::json{{"gsf_files", files}, {"survey", to_json(summary)}}.dump(2).c_str());
+    for (const kongsberg::FileSummary& f : loaded.all_files) files.push_back(kongsberg::to_json(f));
+    const char* key = loaded.all_files.empty() ? "gsf_files" : "all_files";
+    std::printf("%s\n", nlohmann::json{{key, files}, {"survey", to_json(summary)}}.dump(2).c_str());
     return;
   }
   for (const gsf::FileSummary& f : loaded.gsf_files) std::printf("%s", gsf::to_text(f).c_str());
+  for (const kongsberg::FileSummary& f : loaded.all_files) std::printf("%s", kongsberg::to_text(f).c_str());
   std::printf("%s", to_text(summary).c_str());
 }
 
 void run_inspect(const InspectOptions& o) {
   const std::vector<std::string>& inputs = o.survey.inputs;
-  if (inputs.size() == 1 && !gsf::is_gsf_path(inputs.front())) {
+  if (inputs.size() == 1 && !is_sonar_file_path(inputs.front())) {
     if (!o.survey.crs.empty() || !o.survey.reference_nav.empty()) {
-      throw std::runtime_error("--crs and --reference-nav are for GSF input");
+      throw std::runtime_error("--crs and --reference-nav are for sonar files (.gsf, .all)");
     }
     inspect_bundle(inputs.front(), o.json);
   } else {
-    inspect_gsf(o);
+    inspect_sonar_files(o);
   }
 }
 
@@ -64,7 +67,7 @@ void run_inspect(const InspectOptions& o) {
 
 void add_inspect_command(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
-  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle or GSF files) and summarise it");
+  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle, GSF or Kongsberg .all files) and summarise it");
   add_survey_options(cmd, options->survey);
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->callback([options] { run_inspect(*options); });

@@ -36,15 +36,18 @@ struct ProcessOptions {
 };
 
 // GSF input: each file copied with the corrected navigation in its ping headers
-// (OUT/<name>.corrected.gsf); a bundle: its pings written as OUT/corrected.gsf.
+// (OUT/<name>.corrected.gsf); a bundle or .all files: their pings written as OUT/corrected.gsf.
 // The bundle's file is the one the service stores for a job.
 void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineResult& result,
                 const std::vector<NavSample>& corrected) {
   const std::filesystem::path out(o.out);
   if (!gsf::is_gsf_path(o.survey.inputs.front())) {
-    const std::filesystem::path bundle = o.survey.inputs.front();
-    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile,
-                                                    [&](PingSink& sink) { return stream_bundle(bundle, sink); });
+    const SurveyInput input = o.survey.input();
+    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile, [&](PingSink& sink) {
+      BundleReadResult read;
+      read.survey = load_survey(input, sink).survey;
+      return read;
+    });
     std::printf("%s: %llu pings with the corrected navigation\n", kCorrectedGsfFile, static_cast<unsigned long long>(pings));
     return;
   }

@@ -1,5 +1,6 @@
 #pragma once
-// The survey a command reads: a bundle, or GSF files with their CRS and reference navigation.
+// The survey a command reads: a bundle, or sonar files (GSF, EM .all) with their CRS and
+// reference navigation.
 // Shared by every command that takes one, so they all accept the same inputs.
 #include <string>
 #include <vector>

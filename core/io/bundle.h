@@ -36,6 +36,10 @@ SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
 std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
                                      ProblemList& problems);
 
+// A reference navigation given beside sonar files (`--reference-nav`): a nav.csv-format file.
+// Throws std::runtime_error listing its problems.
+std::vector<NavSample> read_reference_nav(const std::filesystem::path& path);
+
 struct TimeSpan {
   double begin = 0;
   double end = 0;

@@ -124,6 +124,18 @@ SurveyMetadata parse_survey_json(std::string_view text, std::string_view file,
   return metadata;
 }
 
+std::vector<NavSample> read_reference_nav(const std::filesystem::path& path) {
+  FileSource source(path);
+  ProblemList problems;
+  std::vector<NavSample> reference = parse_nav_csv(source, path.string(), problems);
+  if (problems.has_errors()) {
+    std::string why = "reference navigation is not in the nav.csv format:";
+    for (const Problem& p : problems.take()) why += "\n  " + p.to_string();
+    throw std::runtime_error(why);
+  }
+  return reference;
+}
+
 std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
                                      ProblemList& problems) {
   static constexpr std::array<std::string_view, 7> kColumns = {

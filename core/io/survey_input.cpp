@@ -9,45 +9,68 @@ namespace bathyslam {
 
 namespace {
 
-// True for GSF files; throws for inputs that are neither GSF files nor a bundle on its own.
-bool is_gsf_input(const SurveyInput& input) {
+enum class InputKind { kBundle, kGsf, kAll };
+
+// What the inputs are; throws for inputs that are neither sonar files of one format nor a bundle
+// on its own.
+InputKind kind_of(const SurveyInput& input) {
   if (input.paths.empty()) throw std::runtime_error("no survey given");
-  if (std::all_of(input.paths.begin(), input.paths.end(), gsf::is_gsf_path)) return true;
+  if (std::all_of(input.paths.begin(), input.paths.end(), gsf::is_gsf_path)) return InputKind::kGsf;
+  if (std::all_of(input.paths.begin(), input.paths.end(), kongsberg::is_all_path)) return InputKind::kAll;
+  if (std::any_of(input.paths.begin(), input.paths.end(), is_sonar_file_path) && input.paths.size() > 1) {
+    throw std::runtime_error("sonar files of one survey must be of one format (all .gsf or all .all)");
+  }
   if (input.paths.size() > 1) {
-    throw std::runtime_error("several inputs must all be GSF files (.gsf); a bundle comes alone");
+    throw std::runtime_error("several inputs must all be sonar files (.gsf or .all); a bundle comes alone");
   }
   if (!input.crs.empty() || input.reference_nav) {
     throw std::runtime_error(input.paths.front().string() +
-                             ": --crs and --reference-nav are for GSF input; a bundle names its CRS in survey.json "
+                             ": --crs and --reference-nav are for sonar files; a bundle names its CRS in survey.json "
                              "and holds reference_nav.csv");
   }
-  return false;
+  return InputKind::kBundle;
 }
 
-LoadedSurvey read_gsf(const SurveyInput& input) {
-  gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
-  return {std::move(read.survey), std::move(read.files)};
+LoadedSurvey read_sonar_files(InputKind kind, const SurveyInput& input) {
+  LoadedSurvey loaded;
+  if (kind == InputKind::kGsf) {
+    gsf::SurveyRead read = gsf::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
+    loaded.survey = std::move(read.survey);
+    loaded.gsf_files = std::move(read.files);
+  } else {
+    kongsberg::SurveyRead read = kongsberg::read_survey(input.paths, {input.crs, input.reference_nav, input.keep_soundings});
+    loaded.survey = std::move(read.survey);
+    loaded.all_files = std::move(read.files);
+  }
+  return loaded;
 }
 
 }  // namespace
 
+bool is_sonar_file_path(const std::filesystem::path& path) {
+  return gsf::is_gsf_path(path) || kongsberg::is_all_path(path);
+}
+
 LoadedSurvey load_survey(const SurveyInput& input) {
-  if (is_gsf_input(input)) return read_gsf(input);
-  return {load_bundle(input.paths.front()), {}};
+  const InputKind kind = kind_of(input);
+  if (kind != InputKind::kBundle) return read_sonar_files(kind, input);
+  return {load_bundle(input.paths.front()), {}, {}};
 }
 
 LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
-  if (!is_gsf_input(input)) {
+  const InputKind kind = kind_of(input);
+  if (kind == InputKind::kBundle) {
     BundleReadResult read = stream_bundle(input.paths.front(), sink);
     if (!read.survey) throw BundleError(std::move(read.problems));
-    return {std::move(*read.survey), {}};
+    return {std::move(*read.survey), {}, {}};
   }
-  // GSF holds the navigation in the pings: a first reading without the soundings gives it (and
-  // every error), a second hands the soundings on.
+  // Sonar files hold the navigation in the pings (or beside them): a first reading without the
+  // soundings gives it (and every error), a second hands the soundings on.
   SurveyInput navigation_only = input;
   navigation_only.keep_soundings = false;
-  LoadedSurvey loaded = read_gsf(navigation_only);
-  gsf::stream_soundings(input.paths, loaded.survey, sink);
+  LoadedSurvey loaded = read_sonar_files(kind, navigation_only);
+  if (kind == InputKind::kGsf) gsf::stream_soundings(input.paths, loaded.survey, sink);
+  else kongsberg::stream_soundings(input.paths, loaded.survey, sink);
   return loaded;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
-// What a user may hand bathyslam as a survey: a bundle (folder or .tar), or one or more GSF
-// files in time order with an optional reference navigation CSV.
+// What a user may hand bathyslam as a survey: a bundle (folder or .tar), or one or more sonar
+// files of one format (GSF, or Kongsberg EM .all) in time order with an optional reference
+// navigation CSV.
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -8,29 +9,35 @@
 
 #include "core/io/bundle.h"
 #include "core/io/gsf/gsf_survey.h"
+#include "core/io/kongsberg/all_survey.h"
 #include "core/types/survey.h"
 
 namespace bathyslam {
 
 struct SurveyInput {
   std::vector<std::filesystem::path> paths;
-  std::string crs;  // GSF only: the projected CRS; empty: the data's UTM zone
-  std::optional<std::filesystem::path> reference_nav;  // GSF only
-  bool keep_soundings = true;  // GSF only; false: a survey to summarize (gsf::ReadOptions)
+  std::string crs;  // sonar files only: the projected CRS; empty: the data's UTM zone
+  std::optional<std::filesystem::path> reference_nav;  // sonar files only
+  bool keep_soundings = true;  // sonar files only; false: a survey to summarize (gsf::ReadOptions)
 };
 
 struct LoadedSurvey {
   Survey survey;
-  std::vector<gsf::FileSummary> gsf_files;  // empty for a bundle
+  std::vector<gsf::FileSummary> gsf_files;  // empty but for GSF input
+  std::vector<kongsberg::FileSummary> all_files;  // empty but for .all input
 };
 
-// Reads the survey; throws BundleError, gsf::GsfError or std::runtime_error naming the input.
-// GSF options given with a bundle, or a bundle given with other paths, are refused.
+// Whether `path` names a sonar file bathyslam reads (GSF or .all), by its extension.
+bool is_sonar_file_path(const std::filesystem::path& path);
+
+// Reads the survey; throws BundleError, gsf::GsfError, kongsberg::AllError or std::runtime_error
+// naming the input. Sonar-file options given with a bundle, a bundle given with other paths, and
+// files of two formats are refused.
 LoadedSurvey load_survey(const SurveyInput& input);
 
 // The same handing the pings to `sink` (bundle.h) instead of keeping them: the survey comes back
-// without pings and beams. A bundle's pings stream from its file, so that its soundings are never
-// held whole; GSF files are read whole, then handed on and freed.
+// without pings and beams. A bundle's pings stream from its file; sonar files are read twice,
+// first for the navigation, then ping by ping: the soundings are never held whole.
 LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink);
 
 }  // namespace bathyslam

@@ -28,6 +28,12 @@ Eigen::Matrix3d vehicle_to_map_rotation(double roll_deg, double pitch_deg, doubl
   return ned_to_enu() * body_to_ned;
 }
 
+Eigen::Matrix3d vehicle_to_level_rotation(double roll_deg, double pitch_deg) {
+  return (Eigen::AngleAxisd(pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(roll_deg * kDegToRad, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 Eigen::Isometry3d vehicle_pose(const NavSample& nav, const LocalOrigin& origin) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = vehicle_to_map_rotation(nav.roll_deg, nav.pitch_deg, nav.heading_deg);

@@ -17,6 +17,11 @@ struct LocalOrigin {
 // (x east, y north, z up), from roll, pitch and heading (Z-Y-X Euler angles about NED).
 Eigen::Matrix3d vehicle_to_map_rotation(double roll_deg, double pitch_deg, double heading_deg);
 
+// Rotation taking vehicle-frame vectors to the level frame that keeps the vehicle's heading (x
+// forward horizontal, z down the vertical), from roll and pitch: where sonar formats (GSF, EM
+// .all) store beams, attitude already applied.
+Eigen::Matrix3d vehicle_to_level_rotation(double roll_deg, double pitch_deg);
+
 // The pose of the vehicle in the map frame: a point b in the vehicle frame lands at pose * b.
 Eigen::Isometry3d vehicle_pose(const NavSample& nav, const LocalOrigin& origin);
 

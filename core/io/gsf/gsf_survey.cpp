@@ -17,6 +17,7 @@
 #include "core/io/gsf/gsf_reader.h"
 #include "core/io/gsf/gsf_writer.h"
 #include "core/sync/nav_interpolation.h"
+#include "core/types/pose.h"
 
 namespace bathyslam::gsf {
 namespace {
@@ -26,13 +27,8 @@ constexpr double kDegToRad = M_PI / 180.0;
 constexpr std::size_t kMaxKeptComments = 100;
 constexpr std::size_t kMaxKeptProfiles = 20;
 
-// The rotation from the vehicle frame to GSF's level, heading-aligned frame: roll and pitch only
-// (the same Z-Y-X Euler convention as vehicle_to_map_rotation, without the heading).
-Eigen::Matrix3d tilt(double roll_deg, double pitch_deg) {
-  return (Eigen::AngleAxisd(pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(roll_deg * kDegToRad, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
+// The rotation from the vehicle frame to GSF's level, heading-aligned frame.
+Eigen::Matrix3d tilt(double roll_deg, double pitch_deg) { return vehicle_to_level_rotation(roll_deg, pitch_deg); }
 
 Eigen::Matrix3d yaw(double heading_deg) {
   return Eigen::AngleAxisd(heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -298,18 +294,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
     throw std::runtime_error(files.front().string() + ": no usable ping with soundings");
   }
   out.survey.metadata.sonar = metadata.json(out.files);
-  if (options.reference_nav) {
-    FileSource source(*options.reference_nav);
-    ProblemList problems;
-    const std::string name = options.reference_nav->string();
-    std::vector<NavSample> reference = parse_nav_csv(source, name, problems);
-    if (problems.has_errors()) {
-      std::string why = "reference navigation is not in the nav.csv format:";
-      for (const Problem& p : problems.take()) why += "\n  " + p.to_string();
-      throw std::runtime_error(why);
-    }
-    out.survey.reference_nav = std::move(reference);
-  }
+  if (options.reference_nav) out.survey.reference_nav = read_reference_nav(*options.reference_nav);
   return out;
 }
 

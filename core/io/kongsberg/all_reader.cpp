@@ -1,0 +1,201 @@
+#include <cmath>
+#include <cstring>
+
+#include "core/io/kongsberg/all_datagrams.h"
+
+namespace bathyslam::kongsberg {
+namespace {
+
+// A field that is not what the format allows; the reader adds the file and the offset.
+struct BadField {
+  std::string field, what;
+};
+
+// Little-endian fields of one datagram (from its STX), bounds-checked.
+class Cursor {
+ public:
+  Cursor(const std::string& bytes, std::size_t at) : bytes_(bytes), at_(at) {}
+  std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(take(1, field)[0]); }
+  std::int8_t i8(const char* field) { return static_cast<std::int8_t>(u8(field)); }
+  std::uint16_t u16(const char* field) {
+    const auto* p = reinterpret_cast<const unsigned char*>(take(2, field));
+    return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+  }
+  std::int16_t i16(const char* field) { return static_cast<std::int16_t>(u16(field)); }
+  std::uint32_t u32(const char* field) {
+    const auto* p = reinterpret_cast<const unsigned char*>(take(4, field));
+    return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24);
+  }
+  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
+  float f32(const char* field) {
+    const std::uint32_t bits = u32(field);
+    float value;
+    std::memcpy(&value, &bits, sizeof value);
+    return value;
+  }
+  void skip(std::size_t n, const char* field) { take(n, field); }
+  std::size_t position() const { return at_; }
+
+ private:
+  const char* take(std::size_t n, const char* field) {
+    // The body ends before ETX and the checksum.
+    if (at_ + n + 3 > bytes_.size()) {
+      throw BadField{field, "runs past the end of the " + std::to_string(bytes_.size()) + "-byte datagram"};
+    }
+    const char* p = bytes_.data() + at_;
+    at_ += n;
+    return p;
+  }
+  const std::string& bytes_;
+  std::size_t at_;
+};
+
+// Days from 1970-01-01 to a civil date (Howard Hinnant's algorithm).
+std::int64_t days_from_civil(int y, int m, int d) {
+  y -= m <= 2;
+  const int era = (y >= 0 ? y : y - 399) / 400;
+  const int yoe = y - era * 400;
+  const int doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return static_cast<std::int64_t>(era) * 146097 + doe - 719468;
+}
+
+double epoch_seconds(std::uint32_t date, std::uint32_t ms) {
+  const int year = static_cast<int>(date / 10000), month = static_cast<int>(date / 100 % 100),
+            day = static_cast<int>(date % 100);
+  if (year < 1980 || year > 2200 || month < 1 || month > 12 || day < 1 || day > 31) {
+    throw BadField{"date", std::to_string(date) + " is not a YYYYMMDD date"};
+  }
+  if (ms >= 86'400'000u) throw BadField{"time", std::to_string(ms) + " ms is past midnight"};
+  return static_cast<double>(days_from_civil(year, month, day)) * 86400.0 + ms / 1000.0;
+}
+
+DepthPing xyz88(Cursor& c, double time, std::uint16_t counter, std::uint16_t serial) {
+  DepthPing p;
+  p.time = time;
+  p.counter = counter;
+  p.serial = serial;
+  p.heading_deg = c.u16("heading") / 100.0;
+  p.sound_speed_m_s = c.u16("sound speed") / 10.0;
+  p.transducer_depth_m = c.f32("transmit transducer depth");
+  if (!std::isfinite(p.transducer_depth_m) || std::abs(p.transducer_depth_m) > 12000) {
+    throw BadField{"transmit transducer depth", std::to_string(p.transducer_depth_m) + " m is not a depth"};
+  }
+  const std::uint16_t beams = c.u16("number of beams");
+  c.skip(2 + 4 + 1 + 3, "valid detections, sampling frequency, scanning info");
+  p.beams.resize(beams);
+  for (DepthBeam& b : p.beams) {
+    b.depth_m = c.f32("beam depth");
+    b.across_m = c.f32("beam across-track distance");
+    b.along_m = c.f32("beam along-track distance");
+    c.skip(2 + 1 + 1, "detection window, quality, incidence adjustment");
+    b.detection = c.u8("detection information");
+    c.skip(1 + 2, "cleaning, reflectivity");
+  }
+  return p;
+}
+
+Position position(Cursor& c, double time) {
+  Position p;
+  p.time = time;
+  p.latitude_deg = c.i32("latitude") / 2.0e7;
+  p.longitude_deg = c.i32("longitude") / 1.0e7;
+  if (std::abs(p.latitude_deg) > 90) throw BadField{"latitude", std::to_string(p.latitude_deg) + " deg is off the Earth"};
+  if (std::abs(p.longitude_deg) > 180) throw BadField{"longitude", std::to_string(p.longitude_deg) + " deg is off the Earth"};
+  c.skip(2 + 2 + 2, "fix quality, speed, course");
+  p.heading_deg = c.u16("heading") / 100.0;
+  const std::uint8_t descriptor = c.u8("position system descriptor");
+  p.system = descriptor & 0x03;
+  p.active = (descriptor & 0x80) != 0;
+  return p;
+}
+
+Attitude attitude(Cursor& c, double time) {
+  Attitude a;
+  const std::uint16_t n = c.u16("number of entries");
+  for (std::uint16_t i = 0; i < n; ++i) {
+    a.time.push_back(time + c.u16("attitude sample time") / 1000.0);
+    c.skip(2, "sensor status");
+    a.roll_deg.push_back(c.i16("roll") / 100.0);
+    a.pitch_deg.push_back(c.i16("pitch") / 100.0);
+    a.heave_m.push_back(c.i16("heave") / 100.0);
+    a.heading_deg.push_back(c.u16("heading") / 100.0);
+  }
+  return a;
+}
+
+Installation installation(Cursor& c, const std::string& bytes) {
+  c.skip(2 + 2, "line number, second head serial");
+  const std::size_t begin = c.position(), end = bytes.size() - 3;  // before ETX and the checksum
+  std::string text = bytes.substr(begin, end - begin);
+  text.resize(std::strlen(text.c_str()));  // NUL-terminated, then padding
+  return {text};
+}
+
+}  // namespace
+
+bool DepthBeam::valid() const {
+  return (detection & 0x80) == 0 && std::isfinite(depth_m) && std::isfinite(across_m) && std::isfinite(along_m);
+}
+
+AllError::AllError(const std::string& file, std::uint64_t offset, const std::string& field, const std::string& what)
+    : std::runtime_error(file + ":" + std::to_string(offset) + ": " + field + ": " + what) {}
+
+Reader::Reader(ByteSource& source, std::string file) : source_(source), file_(std::move(file)) {}
+
+std::optional<Datagram> Reader::next() {
+  const std::uint64_t at = offset_;
+  char length_bytes[4];
+  const std::size_t got = read_fully(source_, length_bytes, 4);
+  if (got == 0) return std::nullopt;
+  if (got < 4) throw AllError(file_, at, "datagram length", "the file ends inside it");
+  std::uint32_t length = 0;
+  for (int i = 3; i >= 0; --i) length = (length << 8) | static_cast<unsigned char>(length_bytes[i]);
+  if (length < 19) throw AllError(file_, at, "datagram length", std::to_string(length) + " bytes is shorter than a datagram's frame");
+  if (length > kMaxDatagramBytes) {
+    throw AllError(file_, at, "datagram length", std::to_string(length) + " bytes is over the " +
+                                                   std::to_string(kMaxDatagramBytes) + "-byte limit");
+  }
+  // Read in steps, so that a length running past the end costs only what the file holds.
+  bytes_.clear();
+  while (bytes_.size() < length) {
+    const std::size_t step = std::min<std::size_t>(length - bytes_.size(), 1u << 20);
+    const std::size_t old = bytes_.size();
+    bytes_.resize(old + step);
+    const std::size_t n = read_fully(source_, bytes_.data() + old, step);
+    if (n < step) {
+      throw AllError(file_, at, "datagram length",
+                     std::to_string(length) + " bytes run past the end of the file (" + std::to_string(old + n) + " left)");
+    }
+  }
+  offset_ += 4 + length;
+  ++datagrams_;
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(bytes_[i]); };
+  if (byte(0) != 0x02) throw AllError(file_, at, "STX", "the datagram does not start with 0x02 (not an EM .all file?)");
+  if (byte(length - 3) != 0x03) throw AllError(file_, at, "ETX", "the datagram does not end with 0x03 where its length says");
+  std::uint16_t sum = 0;
+  for (std::size_t i = 1; i < length - 3; ++i) sum = static_cast<std::uint16_t>(sum + byte(i));
+  const std::uint16_t stored = static_cast<std::uint16_t>(byte(length - 2) | (byte(length - 1) << 8));
+  if (sum != stored) {
+    throw AllError(file_, at, "checksum", "the bytes sum to " + std::to_string(sum) + ", the datagram says " + std::to_string(stored));
+  }
+  const std::uint8_t type = byte(1);
+  try {
+    Cursor c(bytes_, 2);
+    model_ = c.u16("EM model");
+    const std::uint32_t date = c.u32("date"), ms = c.u32("time");
+    const std::uint16_t counter = c.u16("counter"), serial = c.u16("serial number");
+    switch (type) {
+      case kXyz88: return xyz88(c, epoch_seconds(date, ms), counter, serial);
+      case kPosition: return position(c, epoch_seconds(date, ms));
+      case kAttitude: return attitude(c, epoch_seconds(date, ms));
+      case kInstallationStart: return installation(c, bytes_);
+      default: return Skipped{type};
+    }
+  } catch (const BadField& bad) {
+    const std::string kind = type >= 0x20 && type < 0x7f ? std::string("'") + static_cast<char>(type) + "' " : "";
+    throw AllError(file_, at, kind + "datagram " + bad.field, bad.what);
+  }
+}
+
+}  // namespace bathyslam::kongsberg

@@ -1,0 +1,381 @@
+#include "core/io/kongsberg/all_survey.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <set>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "core/io/crs.h"
+#include "core/io/kongsberg/all_datagrams.h"
+#include "core/types/format.h"
+#include "core/types/pose.h"
+
+namespace bathyslam::kongsberg {
+namespace {
+
+// Dual-head and dual-swath sonars write each head's swaths of a few ping cycles one after the
+// other (the EM2040 file in tests/data/all: head 2004's two pings, then head 2031's), so swaths
+// come nearly, not exactly, in time order. Both readings put them in order through a window this
+// many swaths wide; a file further out of order is refused.
+constexpr std::size_t kOrderWindow = 64;
+constexpr std::size_t kMaxKeptInstallationText = 4096;
+
+// An XYZ 88 swath between the datagram and the survey.
+struct Swath {
+  double time = 0;
+  int serial = 0;
+  std::size_t file = 0;
+  double heading_deg = 0, transducer_depth_m = 0;
+  std::vector<DepthBeam> beams;  // empty when only counted
+  std::uint32_t soundings = 0;   // valid beams
+};
+
+std::uint32_t valid_beams(const DepthPing& p) {
+  return static_cast<std::uint32_t>(std::count_if(p.beams.begin(), p.beams.end(), [](const DepthBeam& b) { return b.valid(); }));
+}
+
+class TimeOrder {
+ public:
+  // `swath` in; the swaths now due (held beyond the window) appended to `due` in time order.
+  void push(Swath swath, std::vector<Swath>& due, const std::string& where) {
+    if (swath.time < last_) {
+      throw std::runtime_error(where + ": swath at " + format_utc(swath.time, "%Y-%m-%dT%H:%M:%SZ") +
+                               " comes more than " + std::to_string(kOrderWindow) +
+                               " swaths after later ones; give the files in time order");
+    }
+    const std::pair<double, int> key{swath.time, swath.serial};
+    held_.emplace(key, std::move(swath));
+    if (held_.size() > kOrderWindow) pop(due);
+  }
+  void flush(std::vector<Swath>& due) {
+    while (!held_.empty()) pop(due);
+  }
+
+ private:
+  void pop(std::vector<Swath>& due) {
+    auto first = held_.begin();
+    last_ = first->second.time;
+    due.push_back(std::move(first->second));
+    held_.erase(first);
+  }
+  std::multimap<std::pair<double, int>, Swath> held_;
+  double last_ = -std::numeric_limits<double>::infinity();
+};
+
+// The active positioning system's fixes, interpolated at a time inside their span.
+class Fixes {
+ public:
+  explicit Fixes(const std::vector<Position>& all) {
+    // The system the sonar used in real time; files that flag none: the lowest-numbered.
+    any_active_ = std::any_of(all.begin(), all.end(), [](const Position& p) { return p.active; });
+    for (const Position& p : all) lowest_ = std::min(lowest_, p.system);
+    for (const Position& p : all) {
+      if (uses(p)) fixes_.push_back(p);
+    }
+    std::stable_sort(fixes_.begin(), fixes_.end(), [](const Position& a, const Position& b) { return a.time < b.time; });
+  }
+  bool uses(const Position& p) const { return any_active_ ? p.active : p.system == lowest_; }
+  std::size_t size() const { return fixes_.size(); }
+  // Latitude and longitude at `time`, or nothing outside the fixes' span.
+  std::optional<std::pair<double, double>> at(double time) const {
+    if (fixes_.empty() || time < fixes_.front().time || time > fixes_.back().time) return std::nullopt;
+    auto after = std::lower_bound(fixes_.begin(), fixes_.end(), time, [](const Position& p, double t) { return p.time < t; });
+    if (after->time == time || after == fixes_.begin()) return std::pair{after->latitude_deg, after->longitude_deg};
+    const Position& a = *(after - 1);
+    const Position& b = *after;
+    const double w = (time - a.time) / (b.time - a.time);
+    double dlon = b.longitude_deg - a.longitude_deg;  // across the antimeridian the short way
+    if (dlon > 180) dlon -= 360;
+    if (dlon < -180) dlon += 360;
+    double lon = a.longitude_deg + w * dlon;
+    if (lon > 180) lon -= 360;
+    if (lon < -180) lon += 360;
+    return std::pair{a.latitude_deg + w * (b.latitude_deg - a.latitude_deg), lon};
+  }
+
+ private:
+  bool any_active_ = false;
+  int lowest_ = 4;
+  std::vector<Position> fixes_;
+};
+
+// Roll and pitch at a time: interpolated, the nearest sample outside their span, 0 without any.
+class Motion {
+ public:
+  void add(const Attitude& a) {
+    for (std::size_t i = 0; i < a.time.size(); ++i) samples_.push_back({a.time[i], a.roll_deg[i], a.pitch_deg[i]});
+  }
+  void sort() {
+    std::stable_sort(samples_.begin(), samples_.end(), [](const Sample& a, const Sample& b) { return a.time < b.time; });
+  }
+  std::pair<double, double> at(double time) const {
+    if (samples_.empty()) return {0.0, 0.0};
+    auto after = std::lower_bound(samples_.begin(), samples_.end(), time, [](const Sample& s, double t) { return s.time < t; });
+    if (after == samples_.begin()) return {after->roll_deg, after->pitch_deg};
+    if (after == samples_.end()) return {samples_.back().roll_deg, samples_.back().pitch_deg};
+    const Sample& a = *(after - 1);
+    const Sample& b = *after;
+    const double w = b.time > a.time ? (time - a.time) / (b.time - a.time) : 0.0;
+    return {a.roll_deg + w * (b.roll_deg - a.roll_deg), a.pitch_deg + w * (b.pitch_deg - a.pitch_deg)};
+  }
+
+ private:
+  struct Sample {
+    double time, roll_deg, pitch_deg;
+  };
+  std::vector<Sample> samples_;
+};
+
+// The swath's valid soundings in the vehicle frame of `nav` (its time's sample), appended to
+// `beams`: level-frame beams turned back by the sample's roll and pitch, their depth taken from
+// the sample's transducer depth (another head of the same ping may sit deeper).
+void append_soundings(const Swath& s, const NavSample& nav, std::vector<Beam>& beams) {
+  const Eigen::Matrix3d level_to_vehicle = vehicle_to_level_rotation(nav.roll_deg, nav.pitch_deg).transpose();
+  const double below_sample = s.transducer_depth_m - nav.depth_m;
+  for (std::size_t i = 0; i < s.beams.size(); ++i) {
+    const DepthBeam& b = s.beams[i];
+    if (!b.valid()) continue;
+    const Eigen::Vector3d v = level_to_vehicle * Eigen::Vector3d(b.along_m, b.across_m, b.depth_m + below_sample);
+    beams.push_back({static_cast<std::uint32_t>(i), static_cast<float>(v.x()), static_cast<float>(v.y()),
+                     static_cast<float>(v.z())});
+  }
+}
+
+Swath swath_of(DepthPing&& p, std::size_t file, bool keep_beams) {
+  Swath s{p.time, p.serial, file, p.heading_deg, p.transducer_depth_m, {}, valid_beams(p)};
+  if (keep_beams) s.beams = std::move(p.beams);
+  return s;
+}
+
+class SummaryBuilder {
+ public:
+  explicit SummaryBuilder(std::string file) { s_.file = std::move(file); }
+  void add(const Datagram& d) {
+    if (const auto* p = std::get_if<DepthPing>(&d)) add_swath(*p);
+    else if (const auto* f = std::get_if<Position>(&d)) add_fix(*f);
+    else if (const auto* a = std::get_if<Attitude>(&d)) s_.attitude_samples += a->time.size();
+    else if (std::holds_alternative<Installation>(d)) s_.installation = true;
+    else ++s_.skipped_datagrams;
+  }
+  FileSummary finish(std::uint64_t bytes, std::uint64_t datagrams, int model) {
+    s_.bytes = bytes;
+    s_.datagrams = datagrams;
+    s_.model = model;
+    s_.heads.assign(heads_.begin(), heads_.end());
+    return s_;
+  }
+
+ private:
+  static void widen(bool first, double& lo, double& hi, double v) {
+    lo = first ? v : std::min(lo, v);
+    hi = first ? v : std::max(hi, v);
+  }
+  void add_swath(const DepthPing& p) {
+    widen(s_.swaths == 0, s_.time_begin, s_.time_end, p.time);
+    ++s_.swaths;
+    heads_.insert(p.serial);
+    s_.beams += p.beams.size();
+    for (const DepthBeam& b : p.beams) {
+      if (!b.valid()) {
+        ++s_.rejected_beams;
+        continue;
+      }
+      widen(s_.soundings == 0, s_.depth_min_m, s_.depth_max_m, b.depth_m + p.transducer_depth_m);
+      ++s_.soundings;
+    }
+  }
+  void add_fix(const Position& f) {
+    widen(s_.positions == 0, s_.latitude_min, s_.latitude_max, f.latitude_deg);
+    widen(s_.positions == 0, s_.longitude_min, s_.longitude_max, f.longitude_deg);
+    ++s_.positions;
+  }
+  FileSummary s_;
+  std::set<int> heads_;
+};
+
+std::string where(const std::filesystem::path& path, const Reader& reader) {
+  return path.string() + ":" + std::to_string(reader.bytes_read());
+}
+
+}  // namespace
+
+nlohmann::json to_json(const FileSummary& s) {
+  return {{"file", s.file},
+          {"format", "Kongsberg EM .all"},
+          {"model", "EM" + std::to_string(s.model)},
+          {"bytes", s.bytes},
+          {"datagrams", s.datagrams},
+          {"swaths", s.swaths},
+          {"heads", s.heads},
+          {"beams", s.beams},
+          {"soundings", s.soundings},
+          {"rejected_beams", s.rejected_beams},
+          {"swaths_outside_navigation", s.swaths_outside_navigation},
+          {"positions", s.positions},
+          {"positions_used", s.positions_used},
+          {"attitude_samples", s.attitude_samples},
+          {"installation_parameters", s.installation},
+          {"skipped_datagrams", s.skipped_datagrams},
+          {"time_begin", format_utc(s.time_begin, "%Y-%m-%dT%H:%M:%SZ")},
+          {"time_end", format_utc(s.time_end, "%Y-%m-%dT%H:%M:%SZ")},
+          {"latitude_deg", {s.latitude_min, s.latitude_max}},
+          {"longitude_deg", {s.longitude_min, s.longitude_max}},
+          {"depth_m", {s.depth_min_m, s.depth_max_m}}};
+}
+
+std::string to_text(const FileSummary& s) {
+  std::string heads;
+  for (int h : s.heads) heads += (heads.empty() ? "" : ", ") + std::to_string(h);
+  return format("%s: Kongsberg EM%d .all, %llu bytes, %llu datagrams\n", s.file.c_str(), s.model,
+                static_cast<unsigned long long>(s.bytes), static_cast<unsigned long long>(s.datagrams)) +
+         format("  swaths      %llu XYZ 88 from head(s) %s, %llu outside the position fixes\n",
+                static_cast<unsigned long long>(s.swaths), heads.c_str(),
+                static_cast<unsigned long long>(s.swaths_outside_navigation)) +
+         format("  soundings   %llu of %llu beams (%llu rejected)\n", static_cast<unsigned long long>(s.soundings),
+                static_cast<unsigned long long>(s.beams), static_cast<unsigned long long>(s.rejected_beams)) +
+         format("  time        %s .. %s\n", format_utc(s.time_begin, "%Y-%m-%dT%H:%M:%SZ").c_str(),
+                format_utc(s.time_end, "%Y-%m-%dT%H:%M:%SZ").c_str()) +
+         format("  latitude    %.5f .. %.5f\n  longitude   %.5f .. %.5f\n", s.latitude_min, s.latitude_max,
+                s.longitude_min, s.longitude_max) +
+         format("  depth       %.1f .. %.1f m\n", s.depth_min_m, s.depth_max_m) +
+         format("  navigation  %llu position fixes (%llu of the active system), %llu attitude samples\n",
+                static_cast<unsigned long long>(s.positions), static_cast<unsigned long long>(s.positions_used),
+                static_cast<unsigned long long>(s.attitude_samples)) +
+         format("  metadata    installation parameters %s, %llu other datagrams skipped\n", s.installation ? "yes" : "no",
+                static_cast<unsigned long long>(s.skipped_datagrams));
+}
+
+SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const ReadOptions& options) {
+  if (files.empty()) throw std::runtime_error("no .all file given");
+  SurveyRead out;
+  std::vector<Position> positions;
+  std::vector<std::size_t> position_file;
+  Motion motion;
+  std::string installation;
+  std::vector<Swath> swaths;
+  TimeOrder order;
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    FileSource source(files[f]);
+    Reader reader(source, files[f].string());
+    SummaryBuilder summary(files[f].filename().string());
+    while (auto datagram = reader.next()) {
+      summary.add(*datagram);
+      if (auto* p = std::get_if<DepthPing>(&*datagram)) {
+        order.push(swath_of(std::move(*p), f, options.keep_soundings), swaths, where(files[f], reader));
+      } else if (const auto* fix = std::get_if<Position>(&*datagram)) {
+        positions.push_back(*fix);
+        position_file.push_back(f);
+      } else if (const auto* a = std::get_if<Attitude>(&*datagram)) {
+        motion.add(*a);
+      } else if (const auto* i = std::get_if<Installation>(&*datagram); i && installation.empty()) {
+        installation = i->text.substr(0, kMaxKeptInstallationText);
+      }
+    }
+    out.files.push_back(summary.finish(reader.bytes_read(), reader.datagrams_read(), reader.model()));
+  }
+  order.flush(swaths);
+  motion.sort();
+  const Fixes fixes(positions);
+  for (std::size_t k = 0; k < positions.size(); ++k) out.files[position_file[k]].positions_used += fixes.uses(positions[k]);
+
+  Survey& survey = out.survey;
+  survey.metadata.name = files.front().stem().string();
+  std::string crs = options.crs;
+  std::unique_ptr<GeographicProjection> projection;
+  for (Swath& s : swaths) {
+    const auto fix = fixes.at(s.time);
+    if (!fix) {
+      ++out.files[s.file].swaths_outside_navigation;
+      continue;
+    }
+    if (!projection) {
+      if (crs.empty()) crs = utm_crs_of(fix->second, fix->first);
+      if (const auto problem = crs_problem(crs)) throw std::runtime_error(*problem);
+      projection = std::make_unique<GeographicProjection>(crs);
+      survey.metadata.crs = crs;
+    }
+    // Two heads of one ping share one navigation sample (the first head's transducer depth).
+    if (survey.nav.empty() || s.time > survey.nav.back().time) {
+      const auto en = projection->forward(fix->second, fix->first);
+      if (!std::isfinite(en.easting) || !std::isfinite(en.northing)) {
+        throw std::runtime_error(files[s.file].string() + ": cannot project the position at " +
+                                 format_utc(s.time, "%Y-%m-%dT%H:%M:%SZ") + " into " + crs);
+      }
+      const auto [roll, pitch] = motion.at(s.time);
+      survey.nav.push_back({s.time, en.easting, en.northing, s.transducer_depth_m, roll, pitch, s.heading_deg});
+    }
+    Ping ping{s.time, static_cast<std::uint32_t>(survey.beams.size()), s.soundings};
+    if (options.keep_soundings) {
+      append_soundings(s, survey.nav.back(), survey.beams);
+      ping.beam_count = static_cast<std::uint32_t>(survey.beams.size()) - ping.first_beam;
+      std::vector<DepthBeam>().swap(s.beams);
+    }
+    if (ping.beam_count > 0) survey.pings.push_back(ping);
+  }
+  if (survey.pings.empty()) {
+    throw std::runtime_error(files.front().string() + ": no swath with soundings within the position fixes (" +
+                             std::to_string(fixes.size()) + " fixes of the active positioning system)");
+  }
+  nlohmann::json summaries = nlohmann::json::array();
+  for (const FileSummary& f : out.files) summaries.push_back(to_json(f));
+  survey.metadata.sonar = {{"format", "Kongsberg EM .all"}, {"files", summaries}, {"installation_parameters", installation}};
+  if (options.reference_nav) survey.reference_nav = read_reference_nav(*options.reference_nav);
+  return out;
+}
+
+void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& survey, PingSink& sink) {
+  sink.begin(survey);
+  const std::vector<NavSample>& nav = survey.nav;
+  std::size_t next = 0, sample = 0;  // the survey's next ping, and the navigation sample of the last
+  std::vector<Beam> beams;
+  std::string at;  // where the last swath was read, for errors
+  const auto changed = [&] { return std::runtime_error(at + ": the file changed while it was read"); };
+  const auto hand_on = [&](std::vector<Swath>& due) {
+    for (const Swath& s : due) {
+      if (nav.empty() || s.time < nav.front().time || s.time > nav.back().time) continue;
+      while (sample < nav.size() && nav[sample].time < s.time) ++sample;
+      if (sample == nav.size() || nav[sample].time != s.time) throw changed();
+      beams.clear();
+      append_soundings(s, nav[sample], beams);
+      if (beams.empty()) continue;
+      if (next == survey.pings.size() || survey.pings[next].time != s.time || survey.pings[next].beam_count != beams.size()) {
+        throw changed();
+      }
+      sink.ping(s.time, beams);
+      ++next;
+    }
+    due.clear();
+  };
+  TimeOrder order;
+  std::vector<Swath> due;
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    FileSource source(files[f]);
+    Reader reader(source, files[f].string());
+    while (auto datagram = reader.next()) {
+      auto* p = std::get_if<DepthPing>(&*datagram);
+      if (p == nullptr) continue;
+      at = where(files[f], reader);
+      order.push(swath_of(std::move(*p), f, true), due, at);
+      hand_on(due);
+    }
+  }
+  order.flush(due);
+  hand_on(due);
+  if (next != survey.pings.size()) throw changed();
+  std::vector<Ping>().swap(survey.pings);
+  std::vector<Beam>().swap(survey.beams);
+}
+
+bool is_all_path(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".all";
+}
+
+}  // namespace bathyslam::kongsberg
