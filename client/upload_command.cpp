@@ -21,6 +21,7 @@
 #include "core/io/bundle.h"
 #include "core/io/bundle_files.h"
 #include "core/io/gsf/gsf_survey.h"
+#include "core/io/survey_input.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -89,9 +90,9 @@ std::vector<LocalFile> bundle_files(const UploadOptions& o, Declaration& declare
   return out;
 }
 
-// GSF files: declared by the options; each under its own file name, the reference navigation
-// as reference_nav.csv. The server orders the files by time.
-std::vector<LocalFile> gsf_files(const UploadOptions& o, Declaration& declared) {
+// Sonar files (GSF or EM .all): declared by the options; each under its own file name, the
+// reference navigation as reference_nav.csv. The server orders the files by time.
+std::vector<LocalFile> sonar_files(const UploadOptions& o, Declaration& declared) {
   declared = {!o.name.empty() ? o.name : std::filesystem::path(o.inputs.front()).stem().string(), o.crs,
               nlohmann::json::object(), nlohmann::json::object()};
   auto local = [](const std::filesystem::path& path, std::string name) {
@@ -101,8 +102,8 @@ std::vector<LocalFile> gsf_files(const UploadOptions& o, Declaration& declared) 
   std::vector<LocalFile> out;
   for (const std::string& input : o.inputs) {
     const std::string name = std::filesystem::path(input).filename().string();
-    if (!gsf::is_gsf_file_name(name))
-      throw std::runtime_error(input + ": a GSF file name must be letters, digits, '.', '_' or '-' and end in .gsf");
+    if (!is_sonar_file_name(name))
+      throw std::runtime_error(input + ": a sonar file name must be letters, digits, '.', '_' or '-' and end in .gsf or .all");
     out.push_back(local(input, name));
   }
   if (!o.reference_nav.empty()) out.push_back(local(o.reference_nav, std::string(kReferenceNavFile)));
@@ -224,11 +225,14 @@ void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
   const bool gsf = std::all_of(o.inputs.begin(), o.inputs.end(), [](const std::string& p) { return gsf::is_gsf_path(p); });
-  if (!gsf && o.inputs.size() > 1) throw std::runtime_error("several inputs must all be GSF files; a bundle comes alone");
-  if (!gsf && (!o.crs.empty() || !o.reference_nav.empty()))
-    throw std::runtime_error("--crs and --reference-nav are for GSF files; a bundle has survey.json and reference_nav.csv");
+  const bool all = std::all_of(o.inputs.begin(), o.inputs.end(), [](const std::string& p) { return kongsberg::is_all_path(p); });
+  const bool sonar = gsf || all;
+  if (!sonar && o.inputs.size() > 1)
+    throw std::runtime_error("several inputs must all be sonar files of one format (.gsf or .all); a bundle comes alone");
+  if (!sonar && (!o.crs.empty() || !o.reference_nav.empty()))
+    throw std::runtime_error("--crs and --reference-nav are for sonar files; a bundle has survey.json and reference_nav.csv");
   Declaration declared;
-  const std::vector<LocalFile> files = gsf ? gsf_files(o, declared) : bundle_files(o, declared);
+  const std::vector<LocalFile> files = sonar ? sonar_files(o, declared) : bundle_files(o, declared);
   bool ready = false;
   const std::int64_t id = retrying(o, [&] { return find_or_create_survey(*surveys, o, declared, ready); });
   if (!ready) {

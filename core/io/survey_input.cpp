@@ -1,6 +1,8 @@
 #include "core/io/survey_input.h"
 
 #include <algorithm>
+#include <cctype>
+#include <limits>
 #include <stdexcept>
 
 #include "core/io/bundle.h"
@@ -58,20 +60,51 @@ LoadedSurvey load_survey(const SurveyInput& input) {
 }
 
 LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
-  const InputKind kind = kind_of(input);
-  if (kind == InputKind::kBundle) {
+  if (kind_of(input) == InputKind::kBundle) {
     BundleReadResult read = stream_bundle(input.paths.front(), sink);
     if (!read.survey) throw BundleError(std::move(read.problems));
     return {std::move(*read.survey), {}, {}};
   }
   // Sonar files hold the navigation in the pings (or beside them): a first reading without the
   // soundings gives it (and every error), a second hands the soundings on.
+  LoadedSurvey loaded = read_sonar_navigation(input);
+  stream_sonar_soundings(input, loaded.survey, sink);
+  return loaded;
+}
+
+LoadedSurvey read_sonar_navigation(const SurveyInput& input) {
+  const InputKind kind = kind_of(input);
+  if (kind == InputKind::kBundle) throw std::runtime_error(input.paths.front().string() + ": not a sonar file (.gsf, .all)");
   SurveyInput navigation_only = input;
   navigation_only.keep_soundings = false;
-  LoadedSurvey loaded = read_sonar_files(kind, navigation_only);
-  if (kind == InputKind::kGsf) gsf::stream_soundings(input.paths, loaded.survey, sink);
-  else kongsberg::stream_soundings(input.paths, loaded.survey, sink);
-  return loaded;
+  return read_sonar_files(kind, navigation_only);
+}
+
+void stream_sonar_soundings(const SurveyInput& input, Survey& survey, PingSink& sink) {
+  if (kind_of(input) == InputKind::kGsf) gsf::stream_soundings(input.paths, survey, sink);
+  else kongsberg::stream_soundings(input.paths, survey, sink);
+}
+
+bool is_sonar_file_name(const std::string& name) {
+  if (name.empty() || name.size() > 200 || name.front() == '.' || !is_sonar_file_path(name)) return false;
+  return std::all_of(name.begin(), name.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
+  });
+}
+
+std::vector<std::filesystem::path> sonar_files_in_time_order(std::vector<std::filesystem::path> files) {
+  const InputKind kind = kind_of(SurveyInput{files, "", std::nullopt, false});
+  if (kind == InputKind::kBundle) throw std::runtime_error(files.front().string() + ": not a sonar file (.gsf, .all)");
+  // Files without a ping go last, by name.
+  std::vector<std::pair<double, std::filesystem::path>> timed;
+  for (std::filesystem::path& path : files) {
+    const std::optional<double> first = kind == InputKind::kGsf ? gsf::first_ping_time(path) : kongsberg::first_swath_time(path);
+    timed.emplace_back(first.value_or(std::numeric_limits<double>::infinity()), std::move(path));
+  }
+  std::sort(timed.begin(), timed.end());
+  std::vector<std::filesystem::path> ordered;
+  for (auto& [time, path] : timed) ordered.push_back(std::move(path));
+  return ordered;
 }
 
 }  // namespace bathyslam

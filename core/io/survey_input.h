@@ -30,6 +30,21 @@ struct LoadedSurvey {
 // Whether `path` names a sonar file bathyslam reads (GSF or .all), by its extension.
 bool is_sonar_file_path(const std::filesystem::path& path);
 
+// Whether `name` may name an uploaded sonar file: a plain file name ending in .gsf or .all, of
+// letters, digits, '.', '_' and '-', not starting with '.', at most 200 characters (it becomes a
+// path on the server).
+bool is_sonar_file_name(const std::string& name);
+
+// Sonar files of one format ordered by their first ping's time, for files whose order nobody gave
+// (a service upload).
+std::vector<std::filesystem::path> sonar_files_in_time_order(std::vector<std::filesystem::path> files);
+
+// The two readings load_survey(input, sink) makes of sonar files, for a caller that changes the
+// survey in between (the service names it as it was uploaded): the navigation and every error
+// (the survey without soundings), then the soundings handed to `sink`, the survey's pings freed.
+LoadedSurvey read_sonar_navigation(const SurveyInput& input);
+void stream_sonar_soundings(const SurveyInput& input, Survey& survey, PingSink& sink);
+
 // Reads the survey; throws BundleError, gsf::GsfError, kongsberg::AllError or std::runtime_error
 // naming the input. Sonar-file options given with a bundle, a bundle given with other paths, and
 // files of two formats are refused.

@@ -1,6 +1,6 @@
 #include "server/storage/stored_bundle.h"
 
-#include "core/io/gsf/gsf_survey.h"
+#include "core/io/survey_input.h"
 #include "server/scratch_dir.h"
 
 #include <array>
@@ -17,29 +17,29 @@ constexpr std::array<std::string_view, 4> kBundleFiles = {kSurveyJsonFile, kNavF
 bool is_bundle_file(const std::string& name) {
   for (std::string_view file : kBundleFiles)
     if (file == name) return true;
-  return gsf::is_gsf_file_name(name);
+  return is_sonar_file_name(name);
 }
 
 namespace {
 
-// GSF uploads: the .gsf files in the time order of their first pings, reference_nav.csv when
-// uploaded; name, CRS (empty: the data's UTM zone), sonar and vehicle from CreateSurvey. A
-// damaged file is one problem naming the file, record and byte. The pings go to `sink` (the
-// files read twice, the soundings never held whole) and the survey comes back without them.
-BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesystem::path& dir, PingSink& sink) {
-  std::vector<std::filesystem::path> files;
+// Sonar-file uploads (GSF or EM .all): the files in the time order of their first pings,
+// reference_nav.csv when uploaded; name, CRS (empty: the data's UTM zone), sonar and vehicle from
+// CreateSurvey. A damaged file is one problem naming the file and where in it. The pings go to
+// `sink` (the files read twice, the soundings never held whole) and the survey comes back without
+// them.
+BundleReadResult read_sonar_survey(const SurveyRecord& record, const std::filesystem::path& dir, PingSink& sink) {
+  SurveyInput input{{}, record.crs, std::nullopt, false};
   for (const auto& entry : std::filesystem::directory_iterator(dir))
-    if (gsf::is_gsf_path(entry.path())) files.push_back(entry.path());
-  gsf::ReadOptions options{record.crs, std::nullopt, false};
-  if (std::filesystem::exists(dir / kReferenceNavFile)) options.reference_nav = dir / kReferenceNavFile;
+    if (is_sonar_file_path(entry.path())) input.paths.push_back(entry.path());
+  if (std::filesystem::exists(dir / kReferenceNavFile)) input.reference_nav = dir / kReferenceNavFile;
   BundleReadResult result;
   try {
-    files = gsf::in_time_order(std::move(files));
-    Survey survey = gsf::read_survey(files, options).survey;
+    input.paths = sonar_files_in_time_order(std::move(input.paths));
+    Survey survey = read_sonar_navigation(input).survey;
     survey.metadata.name = record.name;
     if (!record.sonar.empty()) survey.metadata.sonar["declared"] = record.sonar;
     survey.metadata.vehicle = record.vehicle;
-    gsf::stream_soundings(files, survey, sink);
+    stream_sonar_soundings(input, survey, sink);
     result.survey = std::move(survey);
   } catch (const std::exception& e) {
     // Paths in the message are the scratch copy's; the file names are the upload's.
@@ -56,12 +56,12 @@ BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesyst
 StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)
     : scratch_(scratch_root, "bundle") {
   for (const UploadState& upload : store.uploads(survey_id)) {
-    gsf_ = gsf_ || gsf::is_gsf_path(upload.name);
+    sonar_files_ = sonar_files_ || is_sonar_file_path(upload.name);
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
     std::ofstream out(scratch_.path() / upload.name, std::ios::binary);
     store.export_file(survey_id, upload.name, out);
   }
-  if (gsf_) {
+  if (sonar_files_) {
     std::optional<SurveyRecord> record = store.survey(survey_id);
     if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");
     record_ = std::move(*record);
@@ -69,7 +69,7 @@ StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, c
 }
 
 BundleReadResult StoredSurveyCopy::read(PingSink& sink) const {
-  if (gsf_) return read_gsf_survey(record_, scratch_.path(), sink);
+  if (sonar_files_) return read_sonar_survey(record_, scratch_.path(), sink);
   return named_as_upload(stream_bundle(scratch_.path(), sink));
 }
 

@@ -11,8 +11,8 @@
 
 namespace bathyslam::storage {
 
-// The files a survey may hold: a bundle's, or GSF files (plain names ending in .gsf) with an
-// optional reference_nav.csv; others are refused at upload.
+// The files a survey may hold: a bundle's, or sonar files of one format (plain names ending in
+// .gsf or .all) with an optional reference_nav.csv; others are refused at upload.
 bool is_bundle_file(const std::string& name);
 
 // A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
@@ -24,8 +24,8 @@ class StoredSurveyCopy {
   StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root);
 
   // The bundle (missing files are reported as problems by the reader, with the file name and no
-  // scratch path), or the GSF files when the survey has any, its pings handed to `sink`: the
-  // survey comes back without them. Neither is held whole: a bundle streams, GSF files are read
+  // scratch path), or the sonar files when the survey has any, its pings handed to `sink`: the
+  // survey comes back without them. Neither is held whole: a bundle streams, sonar files are read
   // twice (the navigation and every error, then the soundings).
   BundleReadResult read(PingSink& sink) const;
 
@@ -33,8 +33,8 @@ class StoredSurveyCopy {
   BundleReadResult named_as_upload(BundleReadResult result) const;
 
   server::ScratchDir scratch_;
-  bool gsf_ = false;
-  SurveyRecord record_;  // GSF uploads: name, CRS, sonar and vehicle from CreateSurvey
+  bool sonar_files_ = false;
+  SurveyRecord record_;  // sonar-file uploads: name, CRS, sonar and vehicle from CreateSurvey
 };
 
 

@@ -121,6 +121,14 @@ real_job=$("$BATHYSLAM" submit "$(awk '/^survey .* ready$/ {print $2}' "$work/gs
 "$BATHYSLAM" report "$real_job" > "$work/real_report" || fail "report of the real GSF job"
 grep -q "^trajectory  *not computed: no reference navigation$" "$work/real_report" || fail "$(cat "$work/real_report")"
 grep -q "^consistency  *not computed: no map cell seen by two survey lines" "$work/real_report" || fail "$(cat "$work/real_report")"
+# A Kongsberg EM .all file uploads, finalizes and runs as a job, its corrected GSF at its depths.
+"$BATHYSLAM" upload "$ALL_DATA/0243_P007_MBES_EM122_20150207_044356_Supporter_GA4430.all" --name real-all \
+  > "$work/all1" 2> "$work/all1.err" || fail ".all upload: $(cat "$work/all1.err")"
+all_job=$("$BATHYSLAM" submit "$(awk '/^survey .* ready$/ {print $2}' "$work/all1")" --config mchs | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$all_job" > "$work/all_watch" 2> /dev/null || fail "watch: $(cat "$work/all_watch")"
+grep -q "job $all_job succeeded" "$work/all_watch" || fail "$(cat "$work/all_watch")"
+"$BATHYSLAM" map "$all_job" --format gsf --out "$work/all_job.gsf" > /dev/null || fail "map --format gsf of the .all job"
+"$BATHYSLAM" inspect "$work/all_job.gsf" | grep -q "depth       3479.9 .. 3661.1 m" || fail "the .all job's corrected GSF"
 head -c 5000 "$GSF_DATA/gsfpy_test_data.gsf" > "$work/cut.gsf"
 if "$BATHYSLAM" upload "$work/cut.gsf" 2> "$work/cut.err"; then fail "a truncated GSF file was accepted"; fi
 grep -q "cut.gsf: record 7 at byte 4000: truncated" "$work/cut.err" || fail "$(cat "$work/cut.err")"

@@ -12,6 +12,7 @@
 #include "core/io/crs.h"
 #include "core/io/kongsberg/all_datagrams.h"
 #include "core/io/kongsberg/all_survey.h"
+#include "core/io/survey_input.h"
 #include "core/types/pose.h"
 
 namespace bathyslam::kongsberg {
@@ -233,6 +234,16 @@ TEST(AllSurvey, StreamedSoundingsAreTheSoundingsReadWhole) {
   for (std::size_t i = 0; i < sink.beams.size(); ++i) {
     ASSERT_EQ(sink.beams[i].down, whole.survey.beams[i].down);
     ASSERT_EQ(sink.beams[i].across, whole.survey.beams[i].across);
+  }
+}
+
+TEST(AllSurvey, FilesOfUnknownOrderAreOrderedByTheirFirstSwathAndFormatsAreNotMixed) {
+  EXPECT_EQ(sonar_files_in_time_order({kEm2040, kEm122}), (std::vector<std::filesystem::path>{kEm122, kEm2040}));
+  try {
+    sonar_files_in_time_order({kEm2040, kData / "x.gsf"});
+    FAIL() << "a .gsf and an .all file were taken as one survey";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), testing::HasSubstr("must be of one format"));
   }
 }
 

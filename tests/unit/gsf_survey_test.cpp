@@ -1,6 +1,7 @@
 // GSF as a Survey: real files mapped into the map frame, and a survey written as GSF and read
 // back equal within the fields' resolution.
 #include "core/io/gsf/gsf_survey.h"
+#include "core/io/survey_input.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -146,8 +147,8 @@ TEST(GsfSurvey, FilesOutOfTimeOrderAreRefused) {
 }
 
 TEST(GsfSurvey, FilesOfUnknownOrderAreOrderedByTheirFirstPing) {
-  EXPECT_EQ(in_time_order({kEx1811, kGsfpy}), (std::vector<fs::path>{kGsfpy, kEx1811}));
-  EXPECT_EQ(in_time_order({kGsfpy, kEx1811}), (std::vector<fs::path>{kGsfpy, kEx1811}));
+  EXPECT_EQ(sonar_files_in_time_order({kEx1811, kGsfpy}), (std::vector<fs::path>{kGsfpy, kEx1811}));
+  EXPECT_EQ(sonar_files_in_time_order({kGsfpy, kEx1811}), (std::vector<fs::path>{kGsfpy, kEx1811}));
 }
 
 TEST(GsfSurvey, HeadingsAreStoredInHundredthsWithinOneTurn) {
@@ -161,15 +162,17 @@ TEST(GsfSurvey, HeadingsAreStoredInHundredthsWithinOneTurn) {
   EXPECT_EQ(heading_field(725.5), 550);
 }
 
-TEST(GsfSurvey, UploadedFileNamesArePlainGsfNames) {
-  EXPECT_TRUE(is_gsf_file_name("EX1811_EM302_0059_20181102_212138.gsf"));
-  EXPECT_TRUE(is_gsf_file_name("line-2.GSF"));
-  EXPECT_FALSE(is_gsf_file_name("../survey.gsf"));
-  EXPECT_FALSE(is_gsf_file_name("a/b.gsf"));
-  EXPECT_FALSE(is_gsf_file_name(".gsf"));
-  EXPECT_FALSE(is_gsf_file_name("survey.gsf.tmp"));
-  EXPECT_FALSE(is_gsf_file_name("line 2.gsf"));
-  EXPECT_FALSE(is_gsf_file_name(""));
+TEST(GsfSurvey, UploadedFileNamesArePlainSonarFileNames) {
+  EXPECT_TRUE(is_sonar_file_name("EX1811_EM302_0059_20181102_212138.gsf"));
+  EXPECT_TRUE(is_sonar_file_name("line-2.GSF"));
+  EXPECT_TRUE(is_sonar_file_name("0077_20221109_123655_Belgica.all"));
+  EXPECT_FALSE(is_sonar_file_name("../survey.gsf"));
+  EXPECT_FALSE(is_sonar_file_name("a/b.gsf"));
+  EXPECT_FALSE(is_sonar_file_name(".gsf"));
+  EXPECT_FALSE(is_sonar_file_name("survey.gsf.tmp"));
+  EXPECT_FALSE(is_sonar_file_name("line 2.all"));
+  EXPECT_FALSE(is_sonar_file_name("nav.csv"));
+  EXPECT_FALSE(is_sonar_file_name(""));
 }
 
 TEST(GsfSurvey, RewrittenNavigationMovesThePingsAndKeepsEveryOtherByte) {

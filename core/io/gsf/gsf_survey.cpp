@@ -402,32 +402,13 @@ std::uint64_t write_survey(const Survey& survey, const std::vector<NavSample>& n
   return writer.close();
 }
 
-std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files) {
-  constexpr double kNoPing = std::numeric_limits<double>::infinity();
-  std::vector<std::pair<double, std::filesystem::path>> timed;
-  for (std::filesystem::path& path : files) {
-    FileSource source(path);
-    Reader reader(source, path.string());
-    double first = kNoPing;
-    while (const auto record = reader.next()) {
-      if (const auto* ping = std::get_if<Ping>(&*record)) {
-        first = ping->time;
-        break;
-      }
-    }
-    timed.emplace_back(first, std::move(path));
+std::optional<double> first_ping_time(const std::filesystem::path& path) {
+  FileSource source(path);
+  Reader reader(source, path.string());
+  while (const auto record = reader.next()) {
+    if (const auto* ping = std::get_if<Ping>(&*record)) return ping->time;
   }
-  std::sort(timed.begin(), timed.end());
-  std::vector<std::filesystem::path> ordered;
-  for (auto& [time, path] : timed) ordered.push_back(std::move(path));
-  return ordered;
-}
-
-bool is_gsf_file_name(const std::string& name) {
-  if (name.empty() || name.size() > 200 || name.front() == '.' || !is_gsf_path(name)) return false;
-  return std::all_of(name.begin(), name.end(), [](unsigned char c) {
-    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
-  });
+  return std::nullopt;
 }
 
 bool is_gsf_path(const std::filesystem::path& path) {

@@ -73,9 +73,8 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
 // throws std::runtime_error) and freed: it comes back as stream_bundle's does.
 void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& survey, PingSink& sink);
 
-// `files` ordered by the time of their first ping (files without a ping last, by name), for
-// files whose order nobody gave (a service upload). Reads each file up to its first ping.
-std::vector<std::filesystem::path> in_time_order(std::vector<std::filesystem::path> files);
+// The time of the file's first ping, nothing without one; reads the file up to it.
+std::optional<double> first_ping_time(const std::filesystem::path& path);
 
 // The summary of one file alone, without building a survey (constant memory).
 FileSummary summarize_file(ByteSource& source, const std::string& file);
@@ -112,8 +111,5 @@ class SurveyWriter : public PingSink {
 // Whether `path` names a GSF file (by its extension, as the tools that write it name them).
 bool is_gsf_path(const std::filesystem::path& path);
 
-// Whether `name` may name an uploaded GSF file: a plain file name ending in .gsf, of letters,
-// digits, '.', '_' and '-', not starting with '.', at most 200 characters (it becomes a path).
-bool is_gsf_file_name(const std::string& name);
 
 }  // namespace bathyslam::gsf

@@ -372,6 +372,15 @@ void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& s
   std::vector<Beam>().swap(survey.beams);
 }
 
+std::optional<double> first_swath_time(const std::filesystem::path& path) {
+  FileSource source(path);
+  Reader reader(source, path.string());
+  while (const auto datagram = reader.next()) {
+    if (const auto* swath = std::get_if<DepthPing>(&*datagram)) return swath->time;
+  }
+  return std::nullopt;
+}
+
 bool is_all_path(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });

@@ -60,6 +60,9 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
 // gsf::stream_soundings does: `survey` is read_survey's of the same files without soundings.
 void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& survey, PingSink& sink);
 
+// The time of the file's first XYZ 88 swath, nothing without one; reads the file up to it.
+std::optional<double> first_swath_time(const std::filesystem::path& path);
+
 // Whether `path` names an EM .all file (by its extension).
 bool is_all_path(const std::filesystem::path& path);
 
