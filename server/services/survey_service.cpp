@@ -183,9 +183,12 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     try {
       storage::UploadState state = context_.surveys.begin_upload(survey_id, name, first.size_bytes(), digest);
       // Each chunk is committed as it arrives: a cut stream keeps everything received before it.
+      // A stream from the file's start hashes as it goes, so the whole file is not read back.
+      std::optional<storage::Sha256Stream> from_start;
+      if (first.offset() == 0) from_start.emplace();
       auto append = [&](const v1::UploadFileRequest& message) {
         storage::Bytes data(message.data().begin(), message.data().end());
-        state = context_.surveys.append_chunk(survey_id, name, message.offset(), data);
+        state = context_.surveys.append_chunk(survey_id, name, message.offset(), data, from_start ? &*from_start : nullptr);
       };
       if (!first.data().empty()) append(first);
       v1::UploadFileRequest message;

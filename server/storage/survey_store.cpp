@@ -24,26 +24,6 @@ bool plain_file_name(const std::string& name) {
 
 Bytes digest_bytes(const Sha256& digest) { return Bytes(digest.begin(), digest.end()); }
 
-// SHA-256 over data that arrives in pieces (a file read back chunk by chunk).
-class Sha256Stream {
- public:
-  Sha256Stream() : context_(EVP_MD_CTX_new(), &EVP_MD_CTX_free) {
-    if (!context_ || !EVP_DigestInit_ex(context_.get(), EVP_sha256(), nullptr)) throw std::runtime_error("SHA-256 failed");
-  }
-  void add(const Bytes& bytes) {
-    if (!EVP_DigestUpdate(context_.get(), bytes.data(), bytes.size())) throw std::runtime_error("SHA-256 failed");
-  }
-  Sha256 finish() {
-    Sha256 digest{};
-    unsigned int length = 0;
-    if (!EVP_DigestFinal_ex(context_.get(), digest.data(), &length) || length != 32) throw std::runtime_error("SHA-256 failed");
-    return digest;
-  }
-
- private:
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context_;
-};
-
 Sha256 to_sha256(const Bytes& bytes) {
   Sha256 digest{};
   std::copy_n(bytes.begin(), std::min(bytes.size(), digest.size()), digest.begin());
@@ -104,6 +84,21 @@ std::vector<UploadState> uploads_on(Connection& connection, std::int64_t survey_
 Bytes token_hash(const std::string& token) { return digest_bytes(sha256(Bytes(token.begin(), token.end()))); }
 
 }  // namespace
+
+Sha256Stream::Sha256Stream() : context_(EVP_MD_CTX_new(), &EVP_MD_CTX_free) {
+  if (!context_ || !EVP_DigestInit_ex(context_.get(), EVP_sha256(), nullptr)) throw std::runtime_error("SHA-256 failed");
+}
+
+void Sha256Stream::add(const Bytes& bytes) {
+  if (!EVP_DigestUpdate(context_.get(), bytes.data(), bytes.size())) throw std::runtime_error("SHA-256 failed");
+}
+
+Sha256 Sha256Stream::finish() {
+  Sha256 digest{};
+  unsigned int length = 0;
+  if (!EVP_DigestFinal_ex(context_.get(), digest.data(), &length) || length != 32) throw std::runtime_error("SHA-256 failed");
+  return digest;
+}
 
 Sha256 sha256(const Bytes& bytes) {
   Sha256 digest{};
@@ -419,7 +414,7 @@ void check_chunk(const UploadRow& file, std::int64_t survey_id, const std::strin
 }  // namespace
 
 UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset,
-                                      const Bytes& data) {
+                                      const Bytes& data, Sha256Stream* from_start) {
   if (data.size() > chunk_bytes_)
     throw UploadError(UploadError::Kind::kInvalid,
                       "data: a chunk holds at most " + std::to_string(chunk_bytes_) + " bytes, got " + std::to_string(data.size()));
@@ -438,6 +433,7 @@ UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string&
     throw UploadError(UploadError::Kind::kNotFound, "survey " + std::to_string(survey_id) + " has no upload of '" + name + "'");
   const UploadRow file = upload_row_of(found);
   check_chunk(file, survey_id, name, offset, data.size());
+  if (from_start) from_start->add(data);
   const std::int64_t file_id = file.file_id, size = file.size, chunks = file.chunks;
   const std::int64_t now_committed = file.committed + static_cast<std::int64_t>(data.size());
   std::int64_t chunk_count = chunks;
@@ -447,9 +443,11 @@ UploadState SurveyStore::append_chunk(std::int64_t survey_id, const std::string&
   }
   bool complete = false;
   if (now_committed == size) {
-    Sha256Stream digest;
-    for_each_chunk(*connection, file_id, chunk_count, name, [&](const Bytes& bytes) { digest.add(bytes); });
-    const Sha256 received = digest.finish();
+    const Sha256 received = from_start ? from_start->finish() : [&] {
+      Sha256Stream digest;
+      for_each_chunk(*connection, file_id, chunk_count, name, [&](const Bytes& bytes) { digest.add(bytes); });
+      return digest.finish();
+    }();
     if (received != to_sha256(file.sha256)) {
       // Discarded and committed before throwing, so that a retry starts from zero.
       connection->exec("DELETE FROM survey_file_chunks WHERE file_id = $1", {file_id});

@@ -1,8 +1,11 @@
 #pragma once
 // Tenants, their API tokens, and their surveys: uploaded files (in chunks, with size and
 // SHA-256) and the validation of each survey's bundle.
+#include <openssl/evp.h>
+
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <stdexcept>
@@ -92,6 +95,17 @@ struct TokenInfo {
   std::optional<double> expires_at;
 };
 
+// SHA-256 over data that arrives in pieces (an upload's chunks, a file read back chunk by chunk).
+class Sha256Stream {
+ public:
+  Sha256Stream();
+  void add(const Bytes& bytes);
+  Sha256 finish();  // once
+
+ private:
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context_;
+};
+
 class SurveyStore {
  public:
   // Files are split into chunks of `chunk_bytes` (1 MiB by default: well under PostgreSQL's
@@ -129,7 +143,11 @@ class SurveyStore {
                            const Sha256& digest);
   // Stores `data` at `offset`, which must be the committed size. When the file is then whole,
   // verifies size and SHA-256; a mismatch discards the upload (kChecksum) so a retry starts clean.
-  UploadState append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset, const Bytes& data);
+  // `from_start`, for a stream of chunks that began at offset 0: the SHA-256 of the bytes before
+  // `data`, which the chunk is added to, so that the whole file's digest is known without reading
+  // the file back (a resumed upload reads back what an earlier stream committed).
+  UploadState append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset, const Bytes& data,
+                           Sha256Stream* from_start = nullptr);
   std::optional<UploadState> upload_state(std::int64_t survey_id, const std::string& name);
   std::vector<UploadState> uploads(std::int64_t survey_id);
   // Streams a complete file into `out` chunk by chunk, checking its SHA-256 on the way.

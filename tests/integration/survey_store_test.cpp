@@ -216,5 +216,44 @@ TEST(SurveyStore, AValidationOfFilesThatChangedMeanwhileIsNotSaved) {
   EXPECT_THROW(store.begin_upload(survey, "pings.csv", 1, sha256(bytes_of("x"))), UploadError);
 }
 
+// An upload streamed from its start is hashed as it arrives (the file is not read back); the
+// verdict must be the one the stored bytes would give, and a resumed upload still reads back.
+TEST(SurveyStore, AStreamHashedAsItArrivesIsJudgedLikeTheStoredBytes) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool, 4);
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "lake", "", nlohmann::json::object(), nlohmann::json::object());
+  const Bytes nav = bytes_of("abcdefghij");
+  const auto piece = [&](const Bytes& b, std::size_t from, std::size_t to) { return Bytes(b.begin() + from, b.begin() + to); };
+
+  store.begin_upload(survey, "nav.csv", 10, sha256(nav));
+  Sha256Stream whole;
+  store.append_chunk(survey, "nav.csv", 0, piece(nav, 0, 4), &whole);
+  store.append_chunk(survey, "nav.csv", 4, piece(nav, 4, 8), &whole);
+  EXPECT_TRUE(store.append_chunk(survey, "nav.csv", 8, piece(nav, 8, 10), &whole).complete);
+  EXPECT_EQ(store.read_file(survey, "nav.csv"), nav);
+
+  // Other bytes than declared: refused and discarded, as when the file is read back.
+  const Bytes other = bytes_of("abcdXfghij");
+  store.begin_upload(survey, "pings.csv", 10, sha256(nav));
+  Sha256Stream wrong;
+  store.append_chunk(survey, "pings.csv", 0, piece(other, 0, 4), &wrong);
+  store.append_chunk(survey, "pings.csv", 4, piece(other, 4, 8), &wrong);
+  try {
+    store.append_chunk(survey, "pings.csv", 8, piece(other, 8, 10), &wrong);
+    FAIL() << "bytes that do not hash to the declared SHA-256 completed an upload";
+  } catch (const UploadError& e) {
+    EXPECT_EQ(e.kind(), UploadError::Kind::kChecksum);
+  }
+  EXPECT_EQ(store.upload_state(survey, "pings.csv")->committed_bytes, 0);
+
+  // A stream cut after its first chunk; the next one starts mid-file and so reads back.
+  Sha256Stream cut;
+  store.append_chunk(survey, "pings.csv", 0, piece(nav, 0, 4), &cut);
+  store.append_chunk(survey, "pings.csv", 4, piece(nav, 4, 8));
+  EXPECT_TRUE(store.append_chunk(survey, "pings.csv", 8, piece(nav, 8, 10)).complete);
+  EXPECT_EQ(store.read_file(survey, "pings.csv"), nav);
+}
+
 }  // namespace
 }  // namespace bathyslam::storage

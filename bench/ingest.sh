@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Upload throughput (issue 35) against two yardsticks on the same machine and the same bytes:
+# copying the file on disk, and PostgreSQL's own COPY of the same bytes, in the server's 1 MiB
+# chunks, into a table shaped like the one uploads go to. Starts a private cluster and a server.
+#   bash bench/ingest.sh BUNDLE [BUILD_DIR=build] [RUNS=3]
+# COMPRESSION=pglz in the environment sets the chunks' compression back to PostgreSQL's default
+# (migration 0009 sets LZ4), for comparison.
+# BUNDLE: a survey bundle folder (e.g. `bathyslam simulate --scenario small --out DIR`); its
+# pings.csv is the file measured. Prints one line per measurement and the medians.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+bundle=$(realpath "$1")
+build=$(realpath "${2:-$root/build}")
+runs=${3:-3}
+work=$(mktemp -d /tmp/bathyslam-ingest.XXXXXX)
+pg="$work/pg"
+server_pid=""
+cleanup() {
+  [ -z "$server_pid" ] || { kill "$server_pid" 2> /dev/null || true; wait "$server_pid" 2> /dev/null || true; }
+  bash "$root/scripts/pg.sh" destroy "$pg" > /dev/null 2>&1 || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+bash "$root/scripts/pg.sh" start "$pg" > /dev/null
+url=$(bash "$root/scripts/pg.sh" url "$pg")
+"$build/server/bathyslam-server" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant bench \
+  > "$work/server.out" 2> "$work/server.log" &
+server_pid=$!
+for _ in $(seq 100); do grep -q "listening" "$work/server.out" && break; sleep 0.1; done
+export BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$work/server.out")
+[ -n "$BATHYSLAM_SERVER" ] || { cat "$work/server.log" >&2; exit 1; }
+
+file="$bundle/pings.csv"
+bytes=$(stat -c %s "$file")
+total=$(du -b --apparent-size -c "$bundle"/*.csv "$bundle"/survey.json | tail -n 1 | cut -f1)
+psql=$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -n 1)/psql
+now() { date +%s.%N; }
+rate() { /usr/bin/python3 -c "import sys; b, s = int(sys.argv[2]), float(sys.argv[1]); print(f'{s:.2f} s, {b / s / 1e6:.1f} MB/s')" "$1" "${2:-$bytes}"; }
+
+# COPY input: the file in 1 MiB chunks, each a bytea in hex, as the server stores them.
+/usr/bin/python3 - "$file" "$work/chunks.copy" <<'PY'
+import sys
+with open(sys.argv[1], "rb") as f, open(sys.argv[2], "w") as out:
+    seq = 0
+    while chunk := f.read(1 << 20):
+        out.write(f"1\t{seq}\t\\\\x{chunk.hex()}\n")
+        seq += 1
+PY
+[ -z "${COMPRESSION:-}" ] || "$psql" "$url" -q -c "ALTER TABLE survey_file_chunks ALTER COLUMN data SET COMPRESSION $COMPRESSION"
+"$psql" "$url" -q -c "CREATE TABLE ingest_yardstick (LIKE survey_file_chunks INCLUDING ALL)"
+
+declare -a copy_s upload_s pg_s end_s
+for run in $(seq "$runs"); do
+  sync
+  t0=$(now); cp "$file" "$work/copy"; sync; t1=$(now)
+  copy_s+=("$(echo "$t1 - $t0" | bc)")
+  rm -f "$work/copy"
+  t0=$(now); "$psql" "$url" -q -c "\\copy ingest_yardstick FROM '$work/chunks.copy'"; t1=$(now)
+  pg_s+=("$(echo "$t1 - $t0" | bc)")
+  "$psql" "$url" -q -c "TRUNCATE ingest_yardstick"
+  # The upload as the server sees it: from CreateSurvey to the last file stored (its SHA-256
+  # checked), from the server log's millisecond stamps; finalize's validation is not in it.
+  e0=$(now)
+  "$build/client/bathyslam" upload "$bundle" --name "ingest-$run" > "$work/upload.out" 2> "$work/upload.err" ||
+    { cat "$work/upload.err" >&2; exit 1; }
+  e1=$(now)
+  end_s+=("$(echo "$e1 - $e0" | bc)")
+  survey=$(awk '/^survey .* ready$/ {print $2}' "$work/upload.out")
+  read -r t0 t1 < <(/usr/bin/python3 - "$work/server.log" "$survey" <<'PY'
+import datetime, re, sys
+stamps = []
+for line in open(sys.argv[1]):
+    if re.search(rf"survey {sys.argv[2]}( created|: .* uploaded)", line):
+        stamps.append(datetime.datetime.strptime(line.split()[0], "%Y-%m-%dT%H:%M:%S.%fZ").timestamp())
+print(stamps[0], stamps[-1])
+PY
+)
+  upload_s+=("$(echo "$t1 - $t0" | bc)")
+  echo "run $run: disk copy $(rate "${copy_s[-1]}"); PostgreSQL COPY $(rate "${pg_s[-1]}"); bathyslam upload of the bundle $(rate "${upload_s[-1]}" "$total") (end to end with hashing and finalize $(rate "${end_s[-1]}" "$total"))"
+done
+median() { printf '%s\n' "$@" | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
+echo "median of $runs, $bytes bytes ($file):"
+echo "  disk copy         $(rate "$(median "${copy_s[@]}")")"
+echo "  PostgreSQL COPY   $(rate "$(median "${pg_s[@]}")")"
+echo "  bathyslam upload  $(rate "$(median "${upload_s[@]}")" "$total") (the bundle, $total bytes, CreateSurvey to the last file stored)"
+echo "  end to end        $(rate "$(median "${end_s[@]}")" "$total") (the CLI's wall time: hashing, upload, FinalizeSurvey)"
