@@ -83,6 +83,7 @@ TEST(AllReader, DecodesTheDatagramsOfARealDualHeadEm2040File) {
   const std::vector<Datagram> all = read_all_datagrams(bytes_of(kEm2040));
   ASSERT_EQ(all.size(), 141u);
   int swaths = 0, fixes = 0, attitude = 0, installation = 0;
+  const SoundSpeedProfile* profile = nullptr;
   const DepthPing* first = nullptr;
   for (const Datagram& d : all) {
     if (const auto* p = std::get_if<DepthPing>(&d)) {
@@ -92,7 +93,13 @@ TEST(AllReader, DecodesTheDatagramsOfARealDualHeadEm2040File) {
     fixes += std::holds_alternative<Position>(d);
     attitude += std::holds_alternative<Attitude>(d);
     installation += std::holds_alternative<Installation>(d);
+    if (const auto* p = std::get_if<SoundSpeedProfile>(&d)) profile = p;
   }
+  ASSERT_NE(profile, nullptr);  // 16 points, 1498.0 m/s at the surface, 1669.0 m/s at 12,000 m
+  ASSERT_EQ(profile->depth_m.size(), 16u);
+  EXPECT_DOUBLE_EQ(profile->sound_speed_m_s.front(), 1498.0);
+  EXPECT_DOUBLE_EQ(profile->depth_m.back(), 12000.0);
+  EXPECT_DOUBLE_EQ(profile->sound_speed_m_s.back(), 1669.0);
   EXPECT_EQ(swaths, 9);
   EXPECT_EQ(fixes, 8);
   EXPECT_EQ(attitude, 8);

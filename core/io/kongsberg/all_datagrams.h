@@ -24,6 +24,7 @@ enum DatagramType : std::uint8_t {
   kAttitude = 'A',
   kInstallationStart = 'I',
   kPosition = 'P',
+  kSoundSpeedProfile = 'U',
   kXyz88 = 'X',
 };
 
@@ -66,11 +67,17 @@ struct Installation {
   std::string text;
 };
 
+// A sound speed profile as the sonar used it (datagram 'U').
+struct SoundSpeedProfile {
+  std::uint32_t date = 0, time_ms = 0;  // when the profile was taken, as the datagram says
+  std::vector<double> depth_m, sound_speed_m_s;
+};
+
 struct Skipped {
   std::uint8_t type = 0;
 };
 
-using Datagram = std::variant<DepthPing, Position, Attitude, Installation, Skipped>;
+using Datagram = std::variant<DepthPing, Position, Attitude, Installation, SoundSpeedProfile, Skipped>;
 
 class AllError : public std::runtime_error {
  public:

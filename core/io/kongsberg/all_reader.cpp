@@ -124,6 +124,19 @@ Attitude attitude(Cursor& c, double time) {
   return a;
 }
 
+SoundSpeedProfile sound_speed_profile(Cursor& c) {
+  SoundSpeedProfile p;
+  p.date = c.u32("profile date");
+  p.time_ms = c.u32("profile time");
+  const std::uint16_t entries = c.u16("number of entries");
+  const std::uint16_t resolution_cm = c.u16("depth resolution");
+  for (std::uint16_t i = 0; i < entries; ++i) {
+    p.depth_m.push_back(c.u32("profile depth") * resolution_cm / 100.0);
+    p.sound_speed_m_s.push_back(c.u32("sound speed") / 10.0);
+  }
+  return p;
+}
+
 Installation installation(Cursor& c, const std::string& bytes) {
   c.skip(2 + 2, "line number, second head serial");
   const std::size_t begin = c.position(), end = bytes.size() - 3;  // before ETX and the checksum
@@ -190,6 +203,7 @@ std::optional<Datagram> Reader::next() {
       case kPosition: return position(c, epoch_seconds(date, ms));
       case kAttitude: return attitude(c, epoch_seconds(date, ms));
       case kInstallationStart: return installation(c, bytes_);
+      case kSoundSpeedProfile: return sound_speed_profile(c);
       default: return Skipped{type};
     }
   } catch (const BadField& bad) {

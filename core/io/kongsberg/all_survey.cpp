@@ -25,6 +25,7 @@ namespace {
 // many swaths wide; a file further out of order is refused.
 constexpr std::size_t kOrderWindow = 64;
 constexpr std::size_t kMaxKeptInstallationText = 4096;
+constexpr std::size_t kMaxKeptProfiles = 20;  // as for GSF: metadata per survey is bounded
 
 // An XYZ 88 swath between the datagram and the survey.
 struct Swath {
@@ -161,6 +162,7 @@ class SummaryBuilder {
     else if (const auto* f = std::get_if<Position>(&d)) add_fix(*f);
     else if (const auto* a = std::get_if<Attitude>(&d)) s_.attitude_samples += a->time.size();
     else if (std::holds_alternative<Installation>(d)) s_.installation = true;
+    else if (std::holds_alternative<SoundSpeedProfile>(d)) ++s_.sound_speed_profiles;
     else ++s_.skipped_datagrams;
   }
   FileSummary finish(std::uint64_t bytes, std::uint64_t datagrams, int model) {
@@ -221,6 +223,7 @@ nlohmann::json to_json(const FileSummary& s) {
           {"positions_used", s.positions_used},
           {"attitude_samples", s.attitude_samples},
           {"installation_parameters", s.installation},
+          {"sound_speed_profiles", s.sound_speed_profiles},
           {"skipped_datagrams", s.skipped_datagrams},
           {"time_begin", format_utc(s.time_begin, "%Y-%m-%dT%H:%M:%SZ")},
           {"time_end", format_utc(s.time_end, "%Y-%m-%dT%H:%M:%SZ")},
@@ -247,7 +250,8 @@ std::string to_text(const FileSummary& s) {
          format("  navigation  %llu position fixes (%llu of the active system), %llu attitude samples\n",
                 static_cast<unsigned long long>(s.positions), static_cast<unsigned long long>(s.positions_used),
                 static_cast<unsigned long long>(s.attitude_samples)) +
-         format("  metadata    installation parameters %s, %llu other datagrams skipped\n", s.installation ? "yes" : "no",
+         format("  metadata    installation parameters %s, %llu sound speed profiles, %llu other datagrams skipped\n",
+                s.installation ? "yes" : "no", static_cast<unsigned long long>(s.sound_speed_profiles),
                 static_cast<unsigned long long>(s.skipped_datagrams));
 }
 
@@ -258,6 +262,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   std::vector<std::size_t> position_file;
   Motion motion;
   std::string installation;
+  nlohmann::json profiles = nlohmann::json::array();
   std::vector<Swath> swaths;
   TimeOrder order;
   for (std::size_t f = 0; f < files.size(); ++f) {
@@ -275,6 +280,12 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
         motion.add(*a);
       } else if (const auto* i = std::get_if<Installation>(&*datagram); i && installation.empty()) {
         installation = i->text.substr(0, kMaxKeptInstallationText);
+      } else if (const auto* svp = std::get_if<SoundSpeedProfile>(&*datagram); svp && profiles.size() < kMaxKeptProfiles) {
+        nlohmann::json points = nlohmann::json::array();
+        for (std::size_t k = 0; k < svp->depth_m.size(); ++k) points.push_back({svp->depth_m[k], svp->sound_speed_m_s[k]});
+        profiles.push_back({{"taken", format("%08u %02u:%02u:%02u", svp->date, svp->time_ms / 3600000, svp->time_ms / 60000 % 60,
+                                             svp->time_ms / 1000 % 60)},
+                            {"depth_m_sound_speed_m_s", points}});
       }
     }
     out.files.push_back(summary.finish(reader.bytes_read(), reader.datagrams_read(), reader.model()));
@@ -324,7 +335,10 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   }
   nlohmann::json summaries = nlohmann::json::array();
   for (const FileSummary& f : out.files) summaries.push_back(to_json(f));
-  survey.metadata.sonar = {{"format", "Kongsberg EM .all"}, {"files", summaries}, {"installation_parameters", installation}};
+  survey.metadata.sonar = {{"format", "Kongsberg EM .all"},
+                           {"files", summaries},
+                           {"installation_parameters", installation},
+                           {"sound_speed_profiles", profiles}};
   if (options.reference_nav) survey.reference_nav = read_reference_nav(*options.reference_nav);
   return out;
 }

@@ -32,6 +32,7 @@ struct FileSummary {
   std::uint64_t positions = 0, positions_used = 0;  // used: of the active positioning system
   std::uint64_t attitude_samples = 0;
   bool installation = false;
+  std::uint64_t sound_speed_profiles = 0;
   std::uint64_t skipped_datagrams = 0;  // types bathyslam does not decode
   double time_begin = 0, time_end = 0;  // of the swaths
   double latitude_min = 0, latitude_max = 0, longitude_min = 0, longitude_max = 0;  // of the fixes
