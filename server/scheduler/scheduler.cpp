@@ -218,6 +218,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       events.failed(error.what());
     }
   };
+  bool succeeded = false;
   try {
     // Registrations share the machine's cores among the workers.
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -265,8 +266,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);
-    if (retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); }))
-      log("job %lld: succeeded in %.1f s", id, seconds_since(start));
+    succeeded = retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); });
+    if (succeeded) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
   } catch (const storage::LeaseLost& error) {
     log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
@@ -288,6 +289,20 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     } else {
       fail(lease, seconds_since(start), error.what());
     }
+  }
+  if (!succeeded) withdraw_if_cancelled(id);
+}
+
+// A cancel may land between two store steps or after the last one (the steps' FOR KEY SHARE
+// lets it through), and is final all the same: what the job stored is removed. Only a cancelled
+// job's: one whose lease was reaped keeps its rows for its next attempt to discard. Should the
+// database be away, the rows stay, and the map RPCs refuse a cancelled job's.
+void Scheduler::withdraw_if_cancelled(std::int64_t job_id) {
+  const long long id = job_id;
+  try {
+    if (results_.discard_if_cancelled(job_id)) log("job %lld: cancelled; whatever it had stored is removed", id);
+  } catch (const std::exception& error) {
+    log("job %lld: could not remove what it stored before it was cancelled (%s); never served", id, error.what());
   }
 }
 

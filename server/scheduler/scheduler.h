@@ -53,6 +53,7 @@ class Scheduler {
   void release(const storage::Lease& lease, double seconds);
   void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error);
   void fail(const storage::Lease& lease, double seconds, const std::string& error);
+  void withdraw_if_cancelled(std::int64_t job_id);
 
   storage::SurveyStore& surveys_;
   storage::JobQueue& jobs_;

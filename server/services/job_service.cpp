@@ -191,7 +191,7 @@ grpc::Status JobService::ListJobs(grpc::ServerContext* call, const v1::ListJobsR
 
 grpc::Status JobService::GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) {
   return handle("GetReport", call, [&] {
-    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     auto report = context_.results.load_report(job.id);
     if (!report)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,

@@ -55,6 +55,14 @@ storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::
   return *job;
 }
 
+storage::JobRecord job_with_results(ServiceContext& context, std::int64_t tenant, std::int64_t job_id) {
+  storage::JobRecord job = owned_job(context, tenant, job_id);
+  if (job.state == storage::JobState::kCancelled)
+    throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                  "job_id: job " + std::to_string(job.id) + " was cancelled; its results are not kept");
+  return job;
+}
+
 int page_size(int requested) {
   if (requested < 0 || requested > 1000) throw invalid("page_size", "must be within 0..1000 (0: 100)");
   return requested == 0 ? 100 : requested;

@@ -65,6 +65,10 @@ std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerCont
 // tenant's ids are indistinguishable from unknown ones).
 storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id);
 storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
+// owned_job for the calls that serve a job's results (map, tiles, trajectory, report): a
+// cancelled job's are never served, FAILED_PRECONDITION, whatever a cancel during the store
+// stage left behind until its worker removes it.
+storage::JobRecord job_with_results(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
 
 // Page sizes (0 means 100, at most 1000) and page tokens (an id as decimal text).
 int page_size(int requested);

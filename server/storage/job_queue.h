@@ -45,7 +45,8 @@ struct Lease {
 // caller's transaction ends: no reaper can take the lease away before the writes of that
 // transaction commit. The holder's heartbeats do not wait for them (a store can take minutes,
 // longer than the lease), nor does a cancel: a store in flight then commits just after the
-// cancel instead of just before it, the same rows either way. Call it inside a transaction.
+// cancel, and its worker removes what the job stored (ResultStore::discard_if_cancelled, which
+// waits for that commit). Call it inside a transaction.
 bool hold_lease(Connection& connection, const Lease& lease);
 
 // A write refused because the lease it was made under is no longer held.

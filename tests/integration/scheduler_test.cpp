@@ -124,5 +124,58 @@ TEST(Scheduler, AJobWhoseStoredParametersAreNotKnownFailsSayingWhichAndStoresNot
   EXPECT_TRUE(f.results.tiles(job).empty());
 }
 
+// Cancels the job, as CancelJob does, from inside the store step that inserts into `table`:
+// the cancel lands at a known point of the store, whatever the timing.
+void cancel_when_stored_into(storage::ConnectionPool& pool, const std::string& table) {
+  auto connection = pool.acquire();
+  connection->exec(
+      "CREATE FUNCTION cancel_the_job() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN"
+      " UPDATE jobs SET state = 'cancelled', finished_at = now(), lease_expires_at = NULL WHERE id = NEW.job_id;"
+      " RETURN NEW; END $$");
+  connection->exec("CREATE TRIGGER cancel_the_job AFTER INSERT ON " + table +
+                   " FOR EACH ROW EXECUTE FUNCTION cancel_the_job()");
+}
+
+// The job's rows in every table its results go to, and its origin.
+long long stored_rows(testing::FreshDatabase& db, std::int64_t job) {
+  const std::string id = std::to_string(job);
+  long long rows = db.scalar("SELECT count(*) FROM jobs WHERE origin_easting IS NOT NULL AND id = " + id);
+  for (const char* table : {"submaps", "constraints", "optimized_poses", "tiles", "maps", "job_files", "reports"})
+    rows += db.scalar(std::string("SELECT count(*) FROM ") + table + " WHERE job_id = " + id);
+  return rows;
+}
+
+bool stored_step(const std::vector<storage::JobEvent>& events, const std::string& step) {
+  for (const storage::JobEvent& e : events)
+    if (e.stage == "store" && e.message == step) return true;
+  return false;
+}
+
+// Issue 37 fault 4: a cancel between two store steps left the steps before it stored and served.
+TEST(Scheduler, AJobCancelledBetweenStoreStepsKeepsNothing) {
+  SchedulerFixture f;
+  const std::int64_t survey = f.stored_survey(f.scratch / "bundle");
+  const std::int64_t job = f.jobs.enqueue({survey, "odometry", {}});
+  cancel_when_stored_into(f.pool, "maps");  // the tiles step, after submaps, constraints and poses
+
+  EXPECT_EQ(f.run_until_finished(job).state, storage::JobState::kCancelled);
+  const std::vector<storage::JobEvent> events = f.jobs.events(job);
+  EXPECT_TRUE(stored_step(events, "tiles"));
+  EXPECT_FALSE(stored_step(events, "report")) << "the cancel came before the last step";
+  EXPECT_EQ(stored_rows(f.db, job), 0);
+}
+
+// The same after the last step, before the job is marked succeeded.
+TEST(Scheduler, AJobCancelledAfterItsLastStoreStepKeepsNothing) {
+  SchedulerFixture f;
+  const std::int64_t survey = f.stored_survey(f.scratch / "bundle");
+  const std::int64_t job = f.jobs.enqueue({survey, "odometry", {}});
+  cancel_when_stored_into(f.pool, "reports");
+
+  EXPECT_EQ(f.run_until_finished(job).state, storage::JobState::kCancelled);
+  EXPECT_TRUE(stored_step(f.jobs.events(job), "report"));
+  EXPECT_EQ(stored_rows(f.db, job), 0);
+}
+
 }  // namespace
 }  // namespace bathyslam::server

@@ -418,6 +418,28 @@ class ServiceApiTest(unittest.TestCase):
         self.assertEqual(self.watch(after.id)[-1].state, job_pb2.SUCCEEDED)
 
 
+    def test_a_cancelled_jobs_results_are_never_served(self):
+        """Issue 37 fault 4: results that a cancel during the store left behind (its worker
+        killed before it removed them) are not served; cancelled here after the job's end, in
+        the database, so that every result is there to be refused."""
+        job = self.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=self.ready_survey("cancelled results"),
+                                                           configuration="odometry"), timeout=30)
+        self.assertEqual(self.watch(job.id)[-1].state, job_pb2.SUCCEEDED)
+        tile = self.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30).tiles[0]
+        psql(self.server.url, f"UPDATE jobs SET state = 'cancelled' WHERE id = {job.id}")
+        streamed = lambda call: lambda request, **kw: list(call(request, **kw))  # noqa: E731
+        for call, request in [
+                (self.maps.GetMapInfo, map_pb2.GetMapInfoRequest(job_id=job.id)),
+                (streamed(self.maps.GetTile), map_pb2.GetTileRequest(job_id=job.id, level=tile.level, col=tile.col,
+                                                                     row=tile.row, format=map_pb2.GEOTIFF)),
+                (streamed(self.maps.GetMap), map_pb2.GetMapRequest(job_id=job.id)),
+                (streamed(self.maps.GetMap), map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.GSF)),
+                (self.maps.GetTrajectory, map_pb2.GetTrajectoryRequest(job_id=job.id)),
+                (self.jobs.GetReport, job_pb2.GetReportRequest(job_id=job.id))]:
+            details = self.assert_code(grpc.StatusCode.FAILED_PRECONDITION, call, request)
+            self.assertEqual(details, f"job_id: job {job.id} was cancelled; its results are not kept")
+
+
 class ServerStopTest(unittest.TestCase):
     """A job running when its server is stopped goes back to the queue at once and runs again."""
 
