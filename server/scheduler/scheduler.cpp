@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 
+#include "core/io/file_bytes.h"
 #include "core/pipeline/job_input.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
@@ -152,14 +153,18 @@ void Scheduler::release(const storage::Lease& lease, double seconds) {
 
 // Gives the job back after the database stayed away longer than the retries; if even that
 // cannot reach the database, the lease expires and the reaper of any server re-queues it.
-void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error) {
+// The same when the scratch disk refused a write: the job's input is not at fault, so it is not
+// failed for it.
+void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,
+                                     storage::Outage outage) {
   const long long id = lease.job_id;
+  const char* what = outage == storage::Outage::kDatabase ? "database unavailable" : "scratch disk failed";
   try {
-    if (jobs_.requeue_after_outage(lease))
-      log("job %lld: database unavailable after %.1f s (%s); given back to the queue", id, seconds, error.c_str());
-    else log("job %lld: database unavailable after %.1f s (%s); no longer ours", id, seconds, error.c_str());
+    if (jobs_.requeue_after_outage(lease, outage))
+      log("job %lld: %s after %.1f s (%s); given back to the queue", id, what, seconds, error.c_str());
+    else log("job %lld: %s after %.1f s (%s); no longer ours", id, what, seconds, error.c_str());
   } catch (const std::exception& again) {
-    log("job %lld: database unavailable after %.1f s (%s); its lease will expire", id, seconds, again.what());
+    log("job %lld: %s after %.1f s (%s); its lease will expire", id, what, seconds, again.what());
   }
 }
 
@@ -279,8 +284,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     }
   } catch (const storage::DatabaseError& error) {
     if (stopping_) release(lease, seconds_since(start));
-    else if (error.transient()) requeue_after_outage(lease, seconds_since(start), error.what());
+    else if (error.transient()) requeue_after_outage(lease, seconds_since(start), error.what(), storage::Outage::kDatabase);
     else fail(lease, seconds_since(start), error.what());
+  } catch (const WriteError& error) {
+    if (stopping_) release(lease, seconds_since(start));
+    else requeue_after_outage(lease, seconds_since(start), error.what(), storage::Outage::kScratchDisk);
   } catch (const std::exception& error) {
     if (stopping_) {
       release(lease, seconds_since(start));

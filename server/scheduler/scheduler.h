@@ -51,7 +51,8 @@ class Scheduler {
              const std::optional<std::filesystem::path>& corrected_gsf,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
-  void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error);
+  void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,
+                            storage::Outage outage);
   void fail(const storage::Lease& lease, double seconds, const std::string& error);
   void withdraw_if_cancelled(std::int64_t job_id);
 

@@ -2,6 +2,7 @@
 
 #include <charconv>
 
+#include "core/io/file_bytes.h"
 #include "core/io/problem.h"
 #include "server/log.h"
 
@@ -98,6 +99,17 @@ grpc::Status database_failure(const char* method, const storage::DatabaseError& 
   return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");
 }
 
+// A scratch file the disk refused: the server's shortage, never a verdict on the request's data
+// (FinalizeSurvey stores none). The path stays in the log.
+grpc::Status write_failure(const char* method, const WriteError& error) {
+  log("%s: %s", method, error.what());
+  if (error.out_of_space())
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        "the server's scratch space is full; nothing was stored, try again later");
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                      "the server could not write its scratch files; nothing was stored, try again later");
+}
+
 }  // namespace
 
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body) {
@@ -109,6 +121,8 @@ grpc::Status handle(const char* method, grpc::ServerContext* call, const std::fu
     return grpc::Status(refusal.code(), refusal.what());
   } catch (const storage::DatabaseError& error) {
     return database_failure(method, error);
+  } catch (const WriteError& error) {
+    return write_failure(method, error);
   } catch (const std::exception& error) {
     log("%s: %s", method, error.what());
     return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");

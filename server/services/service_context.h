@@ -75,7 +75,8 @@ int page_size(int requested);
 std::int64_t page_token(const std::string& token);
 
 // Runs a handler: Refusal becomes its status; a transient database failure UNAVAILABLE (a lost
-// serialization race ABORTED), saying the cause in words; any other failure INTERNAL. Whatever
+// serialization race ABORTED), saying the cause in words; a scratch file the disk refused
+// (WriteError) RESOURCE_EXHAUSTED when it is full, else UNAVAILABLE; any other failure INTERNAL. Whatever
 // the server itself failed at is logged whole and never sent: SQL states, PostgreSQL's messages
 // and server paths stay in the log. A call past its deadline is DEADLINE_EXCEEDED.
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body);

@@ -4,7 +4,6 @@
 #include "server/scratch_dir.h"
 
 #include <array>
-#include <fstream>
 #include <string_view>
 
 namespace bathyslam::storage {
@@ -58,8 +57,7 @@ StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, c
   for (const UploadState& upload : store.uploads(survey_id)) {
     gsf_ = gsf_ || gsf::is_gsf_path(upload.name);
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
-    std::ofstream out(scratch_.path() / upload.name, std::ios::binary);
-    store.export_file(survey_id, upload.name, out);
+    store.export_file(survey_id, upload.name, scratch_.path() / upload.name);
   }
   if (gsf_) {
     std::optional<SurveyRecord> record = store.survey(survey_id);

@@ -3,8 +3,8 @@
 // SHA-256) and the validation of each survey's bundle.
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
-#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -132,8 +132,9 @@ class SurveyStore {
   UploadState append_chunk(std::int64_t survey_id, const std::string& name, std::int64_t offset, const Bytes& data);
   std::optional<UploadState> upload_state(std::int64_t survey_id, const std::string& name);
   std::vector<UploadState> uploads(std::int64_t survey_id);
-  // Streams a complete file into `out` chunk by chunk, checking its SHA-256 on the way.
-  void export_file(std::int64_t survey_id, const std::string& name, std::ostream& out);
+  // Copies a complete file to `to` chunk by chunk, checking its SHA-256 on the way. A write the
+  // disk refuses (full, failing) throws WriteError: never a shorter copy for a reader to judge.
+  void export_file(std::int64_t survey_id, const std::string& name, const std::filesystem::path& to);
   // Reassembles a file and checks its size and SHA-256; throws std::out_of_range if there is no
   // such file and std::runtime_error if it does not match what was uploaded.
   Bytes read_file(std::int64_t survey_id, const std::string& name);

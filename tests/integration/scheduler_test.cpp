@@ -6,7 +6,10 @@
 #include <iterator>
 #include <thread>
 
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <gtest/gtest.h>
 
@@ -174,6 +177,28 @@ TEST(Scheduler, AJobCancelledAfterItsLastStoreStepKeepsNothing) {
 
   EXPECT_EQ(f.run_until_finished(job).state, storage::JobState::kCancelled);
   EXPECT_TRUE(stored_step(f.jobs.events(job), "report"));
+  EXPECT_EQ(stored_rows(f.db, job), 0);
+}
+
+// Issue 37 fault 2: a job whose scratch copy the disk refuses is the server's trouble, not a
+// verdict on its survey: given back to the queue (the attempt counts), and failed only once its
+// attempts are used up, saying it was the disk. Files over 1000 bytes stand for a full disk.
+TEST(Scheduler, AJobWhoseScratchDiskRefusesAWriteIsGivenBackNotFailedForItsInput) {
+  SchedulerFixture f;
+  const std::int64_t survey = f.stored_survey(f.scratch / "bundle");
+  const std::int64_t job = f.jobs.enqueue({survey, "odometry", {}, 2});
+  rlimit unlimited{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &unlimited), 0);
+  signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead of ending the process
+  const rlimit small{1000, unlimited.rlim_max};
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  const storage::JobStatus status = f.run_until_finished(job);
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &unlimited), 0);
+
+  EXPECT_EQ(status.state, storage::JobState::kFailed);
+  EXPECT_EQ(status.attempts, 2) << "given back after the first";
+  EXPECT_NE(status.error.value_or("").find("could not write its scratch files"), std::string::npos)
+      << status.error.value_or("");
   EXPECT_EQ(stored_rows(f.db, job), 0);
 }
 

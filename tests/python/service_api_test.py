@@ -472,6 +472,49 @@ class ServerStopTest(unittest.TestCase):
         self.assertEqual(self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30).attempts, 2)
 
 
+class ScratchDiskFullTest(unittest.TestCase):
+    """Issue 37 fault 2: a full scratch disk is the server's shortage, not a verdict on the survey.
+    The scratch is a tmpfs filled to the last page, so that even survey.json's 627 bytes, which
+    wait in the copy's buffer, fail only when the copy is closed (root mounts it; skipped else)."""
+
+    def setUp(self):
+        self.disk = tempfile.mkdtemp(prefix="full-", dir=STUBS)
+        if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", self.disk]).returncode:
+            self.skipTest("mounting a tmpfs needs root")
+        os.mkdir(os.path.join(self.disk, "scratch"))
+        self.filler = os.path.join(self.disk, "filler")
+        with open(self.filler, "wb") as f:
+            try:
+                f.write(b"\0" * (1 << 20))
+                f.flush()
+            except OSError:
+                pass  # full, as meant
+        self.server = Server(args=["--scratch", os.path.join(self.disk, "scratch")])
+
+    def tearDown(self):
+        if hasattr(self, "server"):
+            self.server.stop()
+            subprocess.run(["umount", self.disk], check=True)
+
+    def test_a_full_scratch_disk_is_resource_exhausted_and_stores_no_verdict(self):
+        surveys = self.server.surveys
+        survey_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="full disk", crs="EPSG:32651"), timeout=30).id
+        self.assertTrue(surveys.UploadFile(upload_requests(survey_id, "survey.json", read("survey.json")), timeout=60).complete)
+        before = database_fingerprint(self.server.url)
+        with self.assertRaises(grpc.RpcError) as raised:
+            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=60)
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.RESOURCE_EXHAUSTED, raised.exception.details())
+        self.assertEqual(raised.exception.details(), "the server's scratch space is full; nothing was stored, try again later")
+        self.assertEqual(database_fingerprint(self.server.url), before, "the database changed")
+        # With space again, the verdict is about the survey: its missing files.
+        os.remove(self.filler)
+        with self.assertRaises(grpc.RpcError) as raised:
+            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=60)
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
+        self.assertIn("nav.csv", raised.exception.details())
+        self.assertNotIn("not valid JSON", raised.exception.details())
+
+
 class OwnCluster(unittest.TestCase):
     """A test with a PostgreSQL cluster of its own, which it may stop, and a server on it."""
 
