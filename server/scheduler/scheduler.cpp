@@ -102,6 +102,23 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
   return report;
 }
 
+// Writes an optional product with `write`: nullopt when written, else why not, in words for the
+// user (the scratch folder `dir` left out of them). A survey the product cannot hold (a ping of
+// more beams than GSF's 2-byte field) must not take the job's map down with it. A disk fault is
+// no such reason (WriteError: the job is given back), nor is a cancel.
+std::optional<std::string> optional_product(const std::filesystem::path& dir, const std::function<void()>& write) {
+  try {
+    write();
+    return std::nullopt;
+  } catch (const WriteError&) {
+    throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const std::exception& error) {
+    return without_folder(error.what(), dir);
+  }
+}
+
 }  // namespace
 
 Scheduler::Scheduler(storage::SurveyStore& surveys, storage::JobQueue& jobs, storage::ResultStore& results,
@@ -171,7 +188,7 @@ void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds
 // What each stage produced, in the order of the pipeline. Everything an earlier try stored is
 // discarded first, so that the whole sequence can run again after a transient failure.
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-                      const std::optional<std::filesystem::path>& corrected_gsf,
+                      const std::optional<std::filesystem::path>& corrected_gsf, const nlohmann::json& failed_products,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
   storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
@@ -198,6 +215,7 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
   });
   step("report", [&] {
     storage::Report report = report_with_plots(result, options_.scratch);
+    report.report["failed_products"] = failed_products;
     report.plots.insert(map.plots.begin(), map.plots.end());
     results.save_report(id, report);
   });
@@ -263,12 +281,22 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const ScratchDir gsf_dir(options_.scratch, "gsf");
     // The corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
     std::optional<std::filesystem::path> gsf;
+    nlohmann::json failed_products = nlohmann::json::array();
     if (input.pings > 0) {
-      gsf = gsf_dir.path() / kCorrectedGsfFile;
-      write_corrected_gsf(survey, result, *gsf, [&](PingSink& sink) { return files->read(sink); });
+      if (auto failure = optional_product(gsf_dir.path(), [&] {
+            write_corrected_gsf(survey, result, gsf_dir.path() / kCorrectedGsfFile,
+                                [&](PingSink& sink) { return files->read(sink); });
+          })) {
+        log("job %lld: %s not written: %s", id, kCorrectedGsfFile, failure->c_str());
+        event("map", 0.75, std::string(kCorrectedGsfFile) + " not written: " + *failure);
+        failed_products.push_back({{"product", kCorrectedGsfFile}, {"reason", *failure}});
+      } else {
+        gsf = gsf_dir.path() / kCorrectedGsfFile;
+      }
     }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
-      store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
+      store(job, result, map, gsf, failed_products,
+            [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);
     succeeded = retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); });

@@ -42,10 +42,7 @@ BundleReadResult read_gsf_survey(const SurveyRecord& record, const std::filesyst
     result.survey = std::move(survey);
   } catch (const std::exception& e) {
     // Paths in the message are the scratch copy's; the file names are the upload's.
-    std::string message = e.what();
-    for (std::string::size_type at; (at = message.find(dir.string() + "/")) != std::string::npos;)
-      message.erase(at, dir.string().size() + 1);
-    result.problems.push_back({Problem::Severity::kError, "", 0, "", message});
+    result.problems.push_back({Problem::Severity::kError, "", 0, "", server::without_folder(e.what(), dir)});
   }
   return result;
 }

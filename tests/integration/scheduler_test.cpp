@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <thread>
 
@@ -37,9 +38,12 @@ struct SchedulerFixture {
   SchedulerFixture() { fs::create_directories(scratch); }
   ~SchedulerFixture() { fs::remove_all(scratch); }
 
-  // The small simulated survey as a bundle in the database, and the folder it was written to.
-  std::int64_t stored_survey(const fs::path& bundle) {
-    write_bundle(sim::simulate(sim::SimulationConfig{}).survey, bundle);
+  // The small simulated survey as a bundle in the database, and the folder it was written to;
+  // `change` may alter the survey first.
+  std::int64_t stored_survey(const fs::path& bundle, const std::function<void(Survey&)>& change = [](Survey&) {}) {
+    Survey survey = sim::simulate(sim::SimulationConfig{}).survey;
+    change(survey);
+    write_bundle(survey, bundle);
     std::vector<storage::FileUpload> files;
     for (const fs::directory_entry& entry : fs::directory_iterator(bundle)) {
       std::ifstream in(entry.path(), std::ios::binary);
@@ -96,6 +100,7 @@ TEST(Scheduler, AQueuedJobIsRunAndItsResultsAreThoseOfTheSameRunOffline) {
   EXPECT_LT(report->report.at("consistency_error_m").at("optimized").at("rmse").get<double>(),
             report->report.at("consistency_error_m").at("dead_reckoning").at("rmse").get<double>());
   EXPECT_FALSE(report->plots.empty());
+  EXPECT_EQ(report->report.at("failed_products"), nlohmann::json::array());
 
   ASSERT_TRUE(f.results.map_grid(job));
   bool geotiff = false;
@@ -200,6 +205,39 @@ TEST(Scheduler, AJobWhoseScratchDiskRefusesAWriteIsGivenBackNotFailedForItsInput
   EXPECT_NE(status.error.value_or("").find("could not write its scratch files"), std::string::npos)
       << status.error.value_or("");
   EXPECT_EQ(stored_rows(f.db, job), 0);
+}
+
+// Issue 37 fault 6: a survey the corrected GSF cannot hold (a ping of more beams than its
+// 2-byte field) failed the whole job after its map was made. The GSF is optional: the map is
+// published, and the report says which product failed and why, without the scratch folder.
+TEST(Scheduler, AFailedCorrectedGsfLeavesTheMapPublishedAndIsReported) {
+  SchedulerFixture f;
+  const std::int64_t survey = f.stored_survey(f.scratch / "bundle", [](Survey& s) {
+    // The last ping (its beams the last of the array) grows to 40,000 beams, copies of its own.
+    Ping& last = s.pings.back();
+    ASSERT_EQ(last.first_beam + last.beam_count, s.beams.size());
+    for (std::uint32_t k = last.beam_count; k < 40'000; ++k) {
+      Beam beam = s.beams[last.first_beam + k % last.beam_count];
+      beam.index = k;
+      s.beams.push_back(beam);
+    }
+    last.beam_count = 40'000;
+  });
+  const std::int64_t job = f.jobs.enqueue({survey, "odometry", {}});
+
+  const storage::JobStatus status = f.run_until_finished(job);
+  ASSERT_EQ(status.state, storage::JobState::kSucceeded) << status.error.value_or("");
+  EXPECT_TRUE(f.results.map_grid(job));
+  EXPECT_FALSE(f.results.tiles(job).empty());
+  EXPECT_EQ(f.results.file_size(job, kCorrectedGsfFile), std::nullopt);
+  const std::optional<storage::Report> report = f.results.load_report(job);
+  ASSERT_TRUE(report);
+  const nlohmann::json& failed = report->report.at("failed_products");
+  ASSERT_EQ(failed.size(), 1u) << failed;
+  EXPECT_EQ(failed[0].at("product"), kCorrectedGsfFile);
+  const std::string reason = failed[0].at("reason");
+  EXPECT_NE(reason.find("number of beams"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find(f.scratch.string()), std::string::npos) << reason;
 }
 
 }  // namespace
