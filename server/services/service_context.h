@@ -18,6 +18,7 @@ namespace bathyslam::server {
 struct Limits {
   std::int64_t max_file_bytes = std::int64_t{8} << 30;  // one uploaded file
   int max_active_jobs = 16;                              // queued + running, per tenant
+  int max_watch_streams = 64;                            // open WatchJob streams per tenant, per server
   int max_attempts = 2;                                  // per job: a crashed worker's job runs once more
   // Cells of one survey's map (1e8: 5 km × 5 km at 0.5 m, 1.2 GB for its three float bands).
   std::uint64_t max_map_cells = 100'000'000;

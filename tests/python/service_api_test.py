@@ -515,6 +515,48 @@ class ScratchDiskFullTest(unittest.TestCase):
         self.assertNotIn("not valid JSON", raised.exception.details())
 
 
+class WatchStreamLimitTest(unittest.TestCase):
+    """Issue 37 fault 1: a tenant's open WatchJob streams are bounded (--max-watch-streams), the
+    stream past the limit refused RESOURCE_EXHAUSTED naming it, and a closed stream's slot comes
+    back. No worker: the job stays queued and its streams stay open."""
+
+    def setUp(self):
+        self.server = Server(args=["--workers", "0", "--max-watch-streams", "2"])
+
+    def tearDown(self):
+        self.server.stop()
+
+    def probe_until(self, job_id, wanted, seconds):
+        """New streams until one answers `wanted` within `seconds`: RESOURCE_EXHAUSTED (refused)
+        or DEADLINE_EXCEEDED (accepted, open until its short deadline). The open streams take
+        their slots as their handlers start, and give them back when they notice the call ended.
+        Its details, or None when no stream answered so."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            try:
+                next(self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job_id), timeout=0.5))
+                self.fail("a queued job's stream sent a message")
+            except grpc.RpcError as error:
+                self.assertIn(error.code(), (grpc.StatusCode.RESOURCE_EXHAUSTED, grpc.StatusCode.DEADLINE_EXCEEDED),
+                              error.details())
+                if error.code() == wanted:
+                    return error.details()
+        return None
+
+    def test_a_tenants_watch_streams_are_bounded(self):
+        survey_id = ready_survey(self.server.surveys, "watched")
+        job = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="odometry"),
+                                         timeout=30)
+        streams = [self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120) for _ in range(2)]
+        self.assertEqual(self.probe_until(job.id, grpc.StatusCode.RESOURCE_EXHAUSTED, 30),
+                         "this tenant has 2 WatchJob streams open, the limit (--max-watch-streams); close one first")
+        streams[0].cancel()
+        self.assertIsNotNone(self.probe_until(job.id, grpc.StatusCode.DEADLINE_EXCEEDED, 30),
+                             "the closed stream's slot never came back")
+        for stream in streams:
+            stream.cancel()
+
+
 class OwnCluster(unittest.TestCase):
     """A test with a PostgreSQL cluster of its own, which it may stop, and a server on it."""
 
