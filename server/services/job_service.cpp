@@ -15,8 +15,8 @@ namespace {
 
 namespace storage = bathyslam::storage;
 
-// WatchJob sleeps until the job's bell rings; this long at most, should a notification be lost
-// (the bell's LISTEN connection down while the database restarts).
+// WatchJob sleeps until the job's bell rings, and checks this often that its call is still there;
+// while the bell cannot listen (the database restarting), it reads the job this often instead.
 constexpr auto kWatchFallback = std::chrono::seconds(2);
 
 v1::JobState to_proto(storage::JobState state) {
@@ -165,7 +165,11 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
         writer->Write(end);
         return;
       }
-      bell_.wait(job.id, rings, kWatchFallback);
+      // While the bell listens, a watcher reads the database only when its job rang, so that
+      // idle watchers cost it nothing however many there are; between rings it only checks
+      // that its call is still there.
+      while (!bell_.wait(job.id, rings, kWatchFallback))
+        if (call->IsCancelled()) return;
     }
   });
 }

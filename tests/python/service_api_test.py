@@ -557,6 +557,36 @@ class WatchStreamLimitTest(unittest.TestCase):
             stream.cancel()
 
 
+class IdleWatchersTest(unittest.TestCase):
+    """Issue 37 fault 1: watchers that wait cost the database nothing; they read it only when
+    their job's bell rings. Measured in PostgreSQL's own count of the server database's
+    transactions (its statistics reach the count up to 10 s late, hence the settling)."""
+
+    def setUp(self):
+        self.server = Server(args=["--workers", "0", "--max-watch-streams", "50"])
+
+    def tearDown(self):
+        self.server.stop()
+
+    def transactions(self):
+        return int(psql(self.server.url, "SELECT xact_commit + xact_rollback FROM pg_stat_database"
+                                         f" WHERE datname = '{self.server.db}'"))
+
+    def test_fifty_waiting_watchers_do_not_read_the_database(self):
+        survey_id = ready_survey(self.server.surveys, "idle")
+        job = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="odometry"),
+                                         timeout=30)
+        streams = [self.server.jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job.id), timeout=120) for _ in range(50)]
+        time.sleep(15)  # their first reads counted
+        before = self.transactions()
+        time.sleep(12)
+        spent = self.transactions() - before
+        print(f"\n50 waiting watchers: {spent} transactions in 12 s", file=sys.stderr)
+        self.assertLess(spent, 25)  # 609 when each re-read its job every 2 s; 2 now (the reads above)
+        for stream in streams:
+            stream.cancel()
+
+
 class OwnCluster(unittest.TestCase):
     """A test with a PostgreSQL cluster of its own, which it may stop, and a server on it."""
 
