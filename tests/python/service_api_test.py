@@ -481,6 +481,7 @@ class ScratchDiskFullTest(unittest.TestCase):
         self.disk = tempfile.mkdtemp(prefix="full-", dir=STUBS)
         if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", self.disk]).returncode:
             self.skipTest("mounting a tmpfs needs root")
+        self.addCleanup(subprocess.run, ["umount", self.disk], check=True)  # after the server's stop
         os.mkdir(os.path.join(self.disk, "scratch"))
         self.filler = os.path.join(self.disk, "filler")
         with open(self.filler, "wb") as f:
@@ -490,11 +491,7 @@ class ScratchDiskFullTest(unittest.TestCase):
             except OSError:
                 pass  # full, as meant
         self.server = Server(args=["--scratch", os.path.join(self.disk, "scratch")])
-
-    def tearDown(self):
-        if hasattr(self, "server"):
-            self.server.stop()
-            subprocess.run(["umount", self.disk], check=True)
+        self.addCleanup(self.server.stop)
 
     def test_a_full_scratch_disk_is_resource_exhausted_and_stores_no_verdict(self):
         surveys = self.server.surveys
