@@ -1,8 +1,8 @@
 // bathyslam submit / watch / jobs / report: SLAM jobs on the server.
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -11,11 +11,16 @@
 #include "bathyslam/v1/job.grpc.pb.h"
 #include "client/commands.h"
 #include "client/remote.h"
+#include "core/io/file_bytes.h"
 #include "core/pipeline/parameters.h"
 #include "core/types/format.h"
 
 namespace bathyslam::cli {
 namespace {
+
+std::span<const std::uint8_t> bytes_of(const std::string& text) {
+  return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
+}
 
 std::string state_name(v1::JobState state) {
   std::string name = v1::JobState_Name(state);
@@ -125,12 +130,10 @@ void run_report(const JobOptions& o) {
   check("GetReport", v1::JobService::NewStub(o.remote.channel())->GetReport(o.remote.context(60).get(), request, &report));
   if (!o.out.empty()) {
     std::filesystem::create_directories(o.out);
-    std::ofstream(std::filesystem::path(o.out) / "report.json") << nlohmann::json::parse(report.report_json()).dump(2) << '\n';
-    for (const v1::Plot& plot : report.plots()) {
-      std::ofstream out(std::filesystem::path(o.out) / std::filesystem::path(plot.name()).filename(), std::ios::binary);
-      out.write(plot.png().data(), static_cast<std::streamsize>(plot.png().size()));
-      if (!out) throw std::runtime_error(o.out + "/" + plot.name() + ": cannot write");
-    }
+    const std::string json = nlohmann::json::parse(report.report_json()).dump(2) + '\n';
+    write_file_bytes(std::filesystem::path(o.out) / "report.json", bytes_of(json));
+    for (const v1::Plot& plot : report.plots())
+      write_file_bytes(std::filesystem::path(o.out) / std::filesystem::path(plot.name()).filename(), bytes_of(plot.png()));
   }
   if (o.json) {
     std::printf("%s\n", nlohmann::json::parse(report.report_json()).dump(2).c_str());

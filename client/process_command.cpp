@@ -86,9 +86,10 @@ void run_process(const ProcessOptions& o) {
   write_nav_csv(corrected, std::filesystem::path(o.out) / "trajectory.csv");
   const nlohmann::json report = report_json(result);
   {
-    std::ofstream out(std::filesystem::path(o.out) / "report.json");
+    const std::filesystem::path path = std::filesystem::path(o.out) / "report.json";
+    std::ofstream out(path);
     out << report.dump(2) << '\n';
-    if (!out) throw std::runtime_error(o.out + "/report.json: cannot write");
+    close_checked(out, path);
   }
   write_report_plots(result, o.out);
   const auto fuse_start = std::chrono::steady_clock::now();

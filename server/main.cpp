@@ -280,6 +280,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-active-jobs", o.limits.max_active_jobs, "queued and running jobs per tenant")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-watch-streams", o.limits.max_watch_streams, "open WatchJob streams per tenant on this server")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")
       ->capture_default_str()->check(CLI::Range(1, 10));
   CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");

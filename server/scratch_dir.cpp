@@ -22,6 +22,12 @@ ScratchDir::~ScratchDir() {
   std::filesystem::remove_all(path_, ignored);
 }
 
+std::string without_folder(std::string message, const std::filesystem::path& dir) {
+  const std::string folder = dir.string() + "/";
+  for (std::string::size_type at; (at = message.find(folder)) != std::string::npos;) message.erase(at, folder.size());
+  return message;
+}
+
 namespace {
 
 constexpr std::string_view kDefaultPrefix = "bathyslam-server-";

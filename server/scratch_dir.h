@@ -19,6 +19,10 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
+// `message` without any "<dir>/" in it: a file in a scratch folder named as the user knows it
+// (its own name), never by the server's path.
+std::string without_folder(std::string message, const std::filesystem::path& dir);
+
 // Where a server given no --scratch keeps its scratch folders: "<temp>/bathyslam-server-<pid>".
 std::filesystem::path default_scratch_root(const std::filesystem::path& temp, int pid);
 

@@ -1,11 +1,11 @@
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
-#include <cstring>
 #include <stdexcept>
 #include <string>
 
 #include "core/io/bundle.h"
+#include "core/io/file_bytes.h"
 
 namespace bathyslam {
 namespace {
@@ -16,7 +16,7 @@ class AtomicFileWriter {
   explicit AtomicFileWriter(std::filesystem::path path)
       : path_(std::move(path)), partial_(path_.string() + ".partial") {
     file_ = std::fopen(partial_.c_str(), "wb");
-    if (file_ == nullptr) fail("cannot create");
+    if (file_ == nullptr) fail();
     buffer_.reserve(kFlushAt + 256);
   }
   ~AtomicFileWriter() {
@@ -48,7 +48,7 @@ class AtomicFileWriter {
     flush();
     if (std::fclose(file_) != 0) {
       file_ = nullptr;
-      fail("cannot write");
+      fail();
     }
     file_ = nullptr;
     std::filesystem::rename(partial_, path_);
@@ -58,12 +58,10 @@ class AtomicFileWriter {
   static constexpr std::size_t kFlushAt = 1 << 20;
 
   void flush() {
-    if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) fail("cannot write");
+    if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) fail();
     buffer_.clear();
   }
-  [[noreturn]] void fail(const char* what) {
-    throw std::runtime_error(partial_.string() + ": " + what + ": " + std::strerror(errno));
-  }
+  [[noreturn]] void fail() { throw WriteError(partial_, errno != 0 ? errno : EIO); }
 
   std::filesystem::path path_;
   std::filesystem::path partial_;

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 
+#include "core/io/file_bytes.h"
 #include "core/pipeline/job_input.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline.h"
@@ -101,6 +102,23 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
   return report;
 }
 
+// Writes an optional product with `write`: nullopt when written, else why not, in words for the
+// user (the scratch folder `dir` left out of them). A survey the product cannot hold (a ping of
+// more beams than GSF's 2-byte field) must not take the job's map down with it. A disk fault is
+// no such reason (WriteError: the job is given back), nor is a cancel.
+std::optional<std::string> optional_product(const std::filesystem::path& dir, const std::function<void()>& write) {
+  try {
+    write();
+    return std::nullopt;
+  } catch (const WriteError&) {
+    throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const std::exception& error) {
+    return without_folder(error.what(), dir);
+  }
+}
+
 }  // namespace
 
 Scheduler::Scheduler(storage::SurveyStore& surveys, storage::JobQueue& jobs, storage::ResultStore& results,
@@ -152,21 +170,25 @@ void Scheduler::release(const storage::Lease& lease, double seconds) {
 
 // Gives the job back after the database stayed away longer than the retries; if even that
 // cannot reach the database, the lease expires and the reaper of any server re-queues it.
-void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error) {
+// The same when the scratch disk refused a write: the job's input is not at fault, so it is not
+// failed for it.
+void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,
+                                     storage::Outage outage) {
   const long long id = lease.job_id;
+  const char* what = outage == storage::Outage::kDatabase ? "database unavailable" : "scratch disk failed";
   try {
-    if (jobs_.requeue_after_outage(lease))
-      log("job %lld: database unavailable after %.1f s (%s); given back to the queue", id, seconds, error.c_str());
-    else log("job %lld: database unavailable after %.1f s (%s); no longer ours", id, seconds, error.c_str());
+    if (jobs_.requeue_after_outage(lease, outage))
+      log("job %lld: %s after %.1f s (%s); given back to the queue", id, what, seconds, error.c_str());
+    else log("job %lld: %s after %.1f s (%s); no longer ours", id, what, seconds, error.c_str());
   } catch (const std::exception& again) {
-    log("job %lld: database unavailable after %.1f s (%s); its lease will expire", id, seconds, again.what());
+    log("job %lld: %s after %.1f s (%s); its lease will expire", id, what, seconds, again.what());
   }
 }
 
 // What each stage produced, in the order of the pipeline. Everything an earlier try stored is
 // discarded first, so that the whole sequence can run again after a transient failure.
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-                      const std::optional<std::filesystem::path>& corrected_gsf,
+                      const std::optional<std::filesystem::path>& corrected_gsf, const nlohmann::json& failed_products,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
   storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
@@ -193,6 +215,7 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
   });
   step("report", [&] {
     storage::Report report = report_with_plots(result, options_.scratch);
+    report.report["failed_products"] = failed_products;
     report.plots.insert(map.plots.begin(), map.plots.end());
     results.save_report(id, report);
   });
@@ -218,6 +241,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       events.failed(error.what());
     }
   };
+  bool succeeded = false;
   try {
     // Registrations share the machine's cores among the workers.
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -257,16 +281,26 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const ScratchDir gsf_dir(options_.scratch, "gsf");
     // The corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
     std::optional<std::filesystem::path> gsf;
+    nlohmann::json failed_products = nlohmann::json::array();
     if (input.pings > 0) {
-      gsf = gsf_dir.path() / kCorrectedGsfFile;
-      write_corrected_gsf(survey, result, *gsf, [&](PingSink& sink) { return files->read(sink); });
+      if (auto failure = optional_product(gsf_dir.path(), [&] {
+            write_corrected_gsf(survey, result, gsf_dir.path() / kCorrectedGsfFile,
+                                [&](PingSink& sink) { return files->read(sink); });
+          })) {
+        log("job %lld: %s not written: %s", id, kCorrectedGsfFile, failure->c_str());
+        event("map", 0.75, std::string(kCorrectedGsfFile) + " not written: " + *failure);
+        failed_products.push_back({{"product", kCorrectedGsfFile}, {"reason", *failure}});
+      } else {
+        gsf = gsf_dir.path() / kCorrectedGsfFile;
+      }
     }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
-      store(job, result, map, gsf, [&](const char* what, double progress) { event("store", progress, what); }, cancel);
+      store(job, result, map, gsf, failed_products,
+            [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);
-    if (retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); }))
-      log("job %lld: succeeded in %.1f s", id, seconds_since(start));
+    succeeded = retry_transient(name + ": marking it succeeded", options_.retry, cancel, [&] { return jobs_.succeed(lease); });
+    if (succeeded) log("job %lld: succeeded in %.1f s", id, seconds_since(start));
     else log("job %lld: finished in %.1f s but the lease was lost (cancelled or reaped)", id, seconds_since(start));
   } catch (const storage::LeaseLost& error) {
     log("job %lld: stopped after %.1f s: %s", id, seconds_since(start), error.what());
@@ -278,8 +312,11 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     }
   } catch (const storage::DatabaseError& error) {
     if (stopping_) release(lease, seconds_since(start));
-    else if (error.transient()) requeue_after_outage(lease, seconds_since(start), error.what());
+    else if (error.transient()) requeue_after_outage(lease, seconds_since(start), error.what(), storage::Outage::kDatabase);
     else fail(lease, seconds_since(start), error.what());
+  } catch (const WriteError& error) {
+    if (stopping_) release(lease, seconds_since(start));
+    else requeue_after_outage(lease, seconds_since(start), error.what(), storage::Outage::kScratchDisk);
   } catch (const std::exception& error) {
     if (stopping_) {
       release(lease, seconds_since(start));
@@ -288,6 +325,20 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     } else {
       fail(lease, seconds_since(start), error.what());
     }
+  }
+  if (!succeeded) withdraw_if_cancelled(id);
+}
+
+// A cancel may land between two store steps or after the last one (the steps' FOR KEY SHARE
+// lets it through), and is final all the same: what the job stored is removed. Only a cancelled
+// job's: one whose lease was reaped keeps its rows for its next attempt to discard. Should the
+// database be away, the rows stay, and the map RPCs refuse a cancelled job's.
+void Scheduler::withdraw_if_cancelled(std::int64_t job_id) {
+  const long long id = job_id;
+  try {
+    if (results_.discard_if_cancelled(job_id)) log("job %lld: cancelled; whatever it had stored is removed", id);
+  } catch (const std::exception& error) {
+    log("job %lld: could not remove what it stored before it was cancelled (%s); never served", id, error.what());
   }
 }
 

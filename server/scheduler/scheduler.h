@@ -47,12 +47,15 @@ class Scheduler {
  private:
   void work(const std::string& worker);
   void run(const storage::ClaimedJob& job);
+  // `failed_products`: the optional products not written, [{product, reason}], for the report.
   void store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-             const std::optional<std::filesystem::path>& corrected_gsf,
+             const std::optional<std::filesystem::path>& corrected_gsf, const nlohmann::json& failed_products,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
-  void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error);
+  void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,
+                            storage::Outage outage);
   void fail(const storage::Lease& lease, double seconds, const std::string& error);
+  void withdraw_if_cancelled(std::int64_t job_id);
 
   storage::SurveyStore& surveys_;
   storage::JobQueue& jobs_;

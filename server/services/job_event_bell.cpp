@@ -27,15 +27,25 @@ JobEventBell::~JobEventBell() {
 std::uint64_t JobEventBell::rings(std::int64_t job_id) {
   std::lock_guard lock(mutex_);
   const auto found = rings_.find(job_id);
-  return found == rings_.end() ? 0 : found->second;
+  return listens_ + (found == rings_.end() ? 0 : found->second);
 }
 
-void JobEventBell::wait(std::int64_t job_id, std::uint64_t seen, std::chrono::milliseconds timeout) {
+bool JobEventBell::wait(std::int64_t job_id, std::uint64_t seen, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
-  rang_.wait_for(lock, timeout, [&] {
+  const bool moved = rang_.wait_for(lock, timeout, [&] {
     const auto found = rings_.find(job_id);
-    return stopping_ || (found != rings_.end() && found->second > seen);
+    return stopping_ || listens_ + (found == rings_.end() ? 0 : found->second) > seen;
   });
+  return moved || !listening_;
+}
+
+void JobEventBell::set_listening(bool listening) {
+  {
+    std::lock_guard lock(mutex_);
+    if (listening && !listening_) ++listens_;
+    listening_ = listening;
+  }
+  rang_.notify_all();
 }
 
 void JobEventBell::listen() {
@@ -46,7 +56,7 @@ void JobEventBell::listen() {
   } catch (...) {
     log("job events: listening stopped; watchers fall back to polling");
   }
-  rang_.notify_all();
+  set_listening(false);
 }
 
 void JobEventBell::listen_until_stopped() {
@@ -57,16 +67,20 @@ void JobEventBell::listen_until_stopped() {
       std::lock_guard lock(mutex_);
       if (stopping_) break;
     }
-    if (!connection && !(connection = storage::open_listener(conninfo_, kChannel))) {
-      if (!reported) log("job events: cannot LISTEN; watchers fall back to polling");
-      reported = true;
-      std::this_thread::sleep_for(std::chrono::seconds(1));
-      continue;
+    if (!connection) {
+      if (!(connection = storage::open_listener(conninfo_, kChannel))) {
+        if (!reported) log("job events: cannot LISTEN; watchers fall back to polling");
+        reported = true;
+        std::this_thread::sleep_for(std::chrono::seconds(1));
+        continue;
+      }
+      set_listening(true);  // wakes every watcher: what rang while it did not listen went unheard
     }
     reported = false;
     const auto payloads = storage::await_notifications(*connection, kListenSlice);
     if (!payloads) {
-      connection.reset();  // the database went away; listen again once it is back
+      set_listening(false);  // watchers poll until the database is back and it listens again
+      connection.reset();
       continue;
     }
     if (payloads->empty()) continue;

@@ -15,8 +15,8 @@ namespace {
 
 namespace storage = bathyslam::storage;
 
-// WatchJob sleeps until the job's bell rings; this long at most, should a notification be lost
-// (the bell's LISTEN connection down while the database restarts).
+// WatchJob sleeps until the job's bell rings, and checks this often that its call is still there;
+// while the bell cannot listen (the database restarting), it reads the job this often instead.
 constexpr auto kWatchFallback = std::chrono::seconds(2);
 
 v1::JobState to_proto(storage::JobState state) {
@@ -125,6 +125,13 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
   return handle("WatchJob", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
     storage::JobRecord job = owned_job(context_, tenant, request->job_id());
+    // Held while the stream is open: each holds a server thread, and one tenant's thousands
+    // slowed every other tenant's calls to seconds.
+    const std::optional<StreamSlots::Slot> slot = watch_slots_.take(tenant);
+    if (!slot)
+      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                    "this tenant has " + std::to_string(watch_slots_.per_tenant()) +
+                        " WatchJob streams open, the limit (--max-watch-streams); close one first");
     std::int64_t last_event = 0;
     // Until the client goes away (or its deadline passes) or the job ends.
     while (!call->IsCancelled()) {
@@ -158,7 +165,11 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
         writer->Write(end);
         return;
       }
-      bell_.wait(job.id, rings, kWatchFallback);
+      // While the bell listens, a watcher reads the database only when its job rang, so that
+      // idle watchers cost it nothing however many there are; between rings it only checks
+      // that its call is still there.
+      while (!bell_.wait(job.id, rings, kWatchFallback))
+        if (call->IsCancelled()) return;
     }
   });
 }
@@ -191,7 +202,7 @@ grpc::Status JobService::ListJobs(grpc::ServerContext* call, const v1::ListJobsR
 
 grpc::Status JobService::GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) {
   return handle("GetReport", call, [&] {
-    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     auto report = context_.results.load_report(job.id);
     if (!report)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,

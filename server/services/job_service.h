@@ -3,12 +3,14 @@
 #include "bathyslam/v1/job.grpc.pb.h"
 #include "server/services/job_event_bell.h"
 #include "server/services/service_context.h"
+#include "server/services/stream_slots.h"
 
 namespace bathyslam::server {
 
 class JobService final : public v1::JobService::Service {
  public:
-  JobService(ServiceContext& context, JobEventBell& bell) : context_(context), bell_(bell) {}
+  JobService(ServiceContext& context, JobEventBell& bell)
+      : context_(context), bell_(bell), watch_slots_(context.limits.max_watch_streams) {}
 
   grpc::Status SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) override;
   grpc::Status GetJob(grpc::ServerContext* call, const v1::GetJobRequest* request, v1::Job* reply) override;
@@ -21,6 +23,7 @@ class JobService final : public v1::JobService::Service {
  private:
   ServiceContext& context_;
   JobEventBell& bell_;
+  StreamSlots watch_slots_;
 };
 
 }  // namespace bathyslam::server

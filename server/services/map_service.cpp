@@ -90,7 +90,7 @@ void set_pose(const Eigen::Isometry3d& pose, v1::Pose* out) {
 grpc::Status MapService::GetMapInfo(grpc::ServerContext* call, const v1::GetMapInfoRequest* request, v1::MapInfo* reply) {
   return handle("GetMapInfo", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
-    const storage::JobRecord job = owned_job(context_, tenant, request->job_id());
+    const storage::JobRecord job = job_with_results(context_, tenant, request->job_id());
     const storage::SurveyRecord survey = owned_survey(context_, tenant, job.survey_id);
     reply->set_job_id(job.id);
     reply->set_has_gsf(context_.results.file_size(job.id, kCorrectedGsfFile).has_value());
@@ -133,7 +133,7 @@ grpc::Status MapService::GetMapInfo(grpc::ServerContext* call, const v1::GetMapI
 grpc::Status MapService::GetTile(grpc::ServerContext* call, const v1::GetTileRequest* request,
                                  grpc::ServerWriter<v1::DataChunk>* writer) {
   return handle("GetTile", call, [&] {
-    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     const std::string format = stored_format(request->format());
     if (request->level() < 0) throw invalid("level", "must not be negative");
     auto data = context_.results.tile(job.id, {format, request->level(), request->col(), request->row()});
@@ -148,7 +148,7 @@ grpc::Status MapService::GetTile(grpc::ServerContext* call, const v1::GetTileReq
 grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapRequest* request,
                                 grpc::ServerWriter<v1::DataChunk>* writer) {
   return handle("GetMap", call, [&] {
-    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     const std::string format = stored_map_format(request->format());
     if (format.empty()) {
       const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
@@ -165,7 +165,7 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
 grpc::Status MapService::GetTrajectory(grpc::ServerContext* call, const v1::GetTrajectoryRequest* request,
                                        v1::Trajectory* reply) {
   return handle("GetTrajectory", call, [&] {
-    const storage::JobRecord job = owned_job(context_, caller_tenant(context_, *call), request->job_id());
+    const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     const std::vector<Eigen::Isometry3d> optimized = context_.results.load_optimized_poses(job.id);
     const std::vector<storage::SubmapPose> submaps = context_.results.submap_poses(job.id);
     if (optimized.empty() || optimized.size() != submaps.size())

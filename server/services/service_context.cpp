@@ -2,6 +2,7 @@
 
 #include <charconv>
 
+#include "core/io/file_bytes.h"
 #include "core/io/problem.h"
 #include "server/log.h"
 
@@ -55,6 +56,14 @@ storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::
   return *job;
 }
 
+storage::JobRecord job_with_results(ServiceContext& context, std::int64_t tenant, std::int64_t job_id) {
+  storage::JobRecord job = owned_job(context, tenant, job_id);
+  if (job.state == storage::JobState::kCancelled)
+    throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                  "job_id: job " + std::to_string(job.id) + " was cancelled; its results are not kept");
+  return job;
+}
+
 int page_size(int requested) {
   if (requested < 0 || requested > 1000) throw invalid("page_size", "must be within 0..1000 (0: 100)");
   return requested == 0 ? 100 : requested;
@@ -90,6 +99,17 @@ grpc::Status database_failure(const char* method, const storage::DatabaseError& 
   return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");
 }
 
+// A scratch file the disk refused: the server's shortage, never a verdict on the request's data
+// (FinalizeSurvey stores none). The path stays in the log.
+grpc::Status write_failure(const char* method, const WriteError& error) {
+  log("%s: %s", method, error.what());
+  if (error.out_of_space())
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        "the server's scratch space is full; nothing was stored, try again later");
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                      "the server could not write its scratch files; nothing was stored, try again later");
+}
+
 }  // namespace
 
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body) {
@@ -101,6 +121,8 @@ grpc::Status handle(const char* method, grpc::ServerContext* call, const std::fu
     return grpc::Status(refusal.code(), refusal.what());
   } catch (const storage::DatabaseError& error) {
     return database_failure(method, error);
+  } catch (const WriteError& error) {
+    return write_failure(method, error);
   } catch (const std::exception& error) {
     log("%s: %s", method, error.what());
     return grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": the server failed; its log has the details");

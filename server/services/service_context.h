@@ -18,6 +18,7 @@ namespace bathyslam::server {
 struct Limits {
   std::int64_t max_file_bytes = std::int64_t{8} << 30;  // one uploaded file
   int max_active_jobs = 16;                              // queued + running, per tenant
+  int max_watch_streams = 64;                            // open WatchJob streams per tenant, per server
   int max_attempts = 2;                                  // per job: a crashed worker's job runs once more
   // Cells of one survey's map (1e8: 5 km × 5 km at 0.5 m, 1.2 GB for its three float bands).
   std::uint64_t max_map_cells = 100'000'000;
@@ -65,13 +66,18 @@ std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerCont
 // tenant's ids are indistinguishable from unknown ones).
 storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id);
 storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
+// owned_job for the calls that serve a job's results (map, tiles, trajectory, report): a
+// cancelled job's are never served, FAILED_PRECONDITION, whatever a cancel during the store
+// stage left behind until its worker removes it.
+storage::JobRecord job_with_results(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
 
 // Page sizes (0 means 100, at most 1000) and page tokens (an id as decimal text).
 int page_size(int requested);
 std::int64_t page_token(const std::string& token);
 
 // Runs a handler: Refusal becomes its status; a transient database failure UNAVAILABLE (a lost
-// serialization race ABORTED), saying the cause in words; any other failure INTERNAL. Whatever
+// serialization race ABORTED), saying the cause in words; a scratch file the disk refused
+// (WriteError) RESOURCE_EXHAUSTED when it is full, else UNAVAILABLE; any other failure INTERNAL. Whatever
 // the server itself failed at is logged whole and never sent: SQL states, PostgreSQL's messages
 // and server paths stay in the log. A call past its deadline is DEADLINE_EXCEEDED.
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body);

@@ -230,10 +230,13 @@ bool JobQueue::release(const Lease& lease) {
                          {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 
-bool JobQueue::requeue_after_outage(const Lease& lease) {
+bool JobQueue::requeue_after_outage(const Lease& lease, Outage outage) {
   auto connection = pool_.acquire();
-  return requeue_or_fail(*connection, kLeaseHeld, "requeued", "worker %s lost the database while running it",
-                         "max_attempts", {lease.job_id, lease.worker, lease.attempt}) == 1;
+  const std::string_view what = outage == Outage::kDatabase
+                                    ? "worker %s lost the database while running it"
+                                    : "worker %s could not write its scratch files (disk full or failing)";
+  return requeue_or_fail(*connection, kLeaseHeld, "requeued", what, "max_attempts",
+                         {lease.job_id, lease.worker, lease.attempt}) == 1;
 }
 
 bool JobQueue::record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message) {

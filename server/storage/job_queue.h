@@ -21,6 +21,9 @@ enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCancelled };
 std::string to_string(JobState state);
 JobState parse_job_state(std::string_view text);  // throws std::invalid_argument
 
+// What kept a worker from finishing a job that is not the job's fault.
+enum class Outage { kDatabase, kScratchDisk };
+
 struct QueueOptions {
   std::chrono::milliseconds lease{30'000};  // a worker must heartbeat well within this
   std::chrono::milliseconds poll{5'000};    // longest sleep without a notification
@@ -45,7 +48,8 @@ struct Lease {
 // caller's transaction ends: no reaper can take the lease away before the writes of that
 // transaction commit. The holder's heartbeats do not wait for them (a store can take minutes,
 // longer than the lease), nor does a cancel: a store in flight then commits just after the
-// cancel instead of just before it, the same rows either way. Call it inside a transaction.
+// cancel, and its worker removes what the job stored (ResultStore::discard_if_cancelled, which
+// waits for that commit). Call it inside a transaction.
 bool hold_lease(Connection& connection, const Lease& lease);
 
 // A write refused because the lease it was made under is no longer held.
@@ -134,10 +138,11 @@ class JobQueue {
   // run out: re-queued, and allowed one more attempt, since a clean stop is not the job's fault.
   // False when the lease was no longer this worker's.
   bool release(const Lease& lease);
-  // A worker that could not finish because the database stayed away longer than its retries
-  // gives the job back for another attempt. Unlike release() the attempt counts, so that a job
-  // cannot bounce forever; with none left it fails. False when the lease was no longer its.
-  bool requeue_after_outage(const Lease& lease);
+  // A worker that could not finish because the database stayed away longer than its retries,
+  // or its scratch disk refused a write (full, failing), gives the job back for another attempt:
+  // not the job's fault. Unlike release() the attempt counts, so that a job cannot bounce
+  // forever; with none left it fails, saying which. False when the lease was no longer its.
+  bool requeue_after_outage(const Lease& lease, Outage outage = Outage::kDatabase);
 
   bool record_event(const Lease& lease, const std::string& stage, double progress, const std::string& message = "");
   std::vector<JobEvent> events(std::int64_t job_id);

@@ -395,15 +395,36 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
   return origin;
 }
 
+namespace {
+
+// Everything a job stored, inside the caller's transaction.
+void delete_results(Connection& connection, std::int64_t job_id) {
+  // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
+  for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
+    connection.exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
+  connection.exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
+}
+
+}  // namespace
+
 void ResultStore::discard(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   check_fence(*connection, job_id);
-  // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
-  for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
-    connection->exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
-  connection->exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
+  delete_results(*connection, job_id);
   transaction.commit();
+}
+
+bool ResultStore::discard_if_cancelled(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  // FOR UPDATE conflicts with the FOR KEY SHARE of a store step in flight (hold_lease): this
+  // waits for that step to commit, so that no row of it lands after the removal.
+  const Result job = connection->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {job_id});
+  if (job.rows() == 0 || parse_job_state(job.text(0, "state")) != JobState::kCancelled) return false;
+  delete_results(*connection, job_id);
+  transaction.commit();
+  return true;
 }
 
 void ResultStore::save_report(std::int64_t job_id, const Report& report) {

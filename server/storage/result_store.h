@@ -97,6 +97,10 @@ class ResultStore {
   // Removes everything the job stored, in one transaction: an attempt stopped halfway through
   // storing (server stopped, lease lost) leaves rows that the next attempt's saves would collide with.
   void discard(std::int64_t job_id);
+  // The same, unfenced, for a job that was cancelled (true then; any other state keeps its
+  // results): a cancel may land between two store steps, or after the last one, and what the
+  // steps before it wrote must not be published. Waits for a store step in flight to commit.
+  bool discard_if_cancelled(std::int64_t job_id);
 
  private:
   // Inside a write's transaction: throws LeaseLost unless the fence's lease is held.

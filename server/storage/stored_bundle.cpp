@@ -4,7 +4,6 @@
 #include "server/scratch_dir.h"
 
 #include <array>
-#include <fstream>
 #include <string_view>
 
 namespace bathyslam::storage {
@@ -43,10 +42,7 @@ BundleReadResult read_sonar_survey(const SurveyRecord& record, const std::filesy
     result.survey = std::move(survey);
   } catch (const std::exception& e) {
     // Paths in the message are the scratch copy's; the file names are the upload's.
-    std::string message = e.what();
-    for (std::string::size_type at; (at = message.find(dir.string() + "/")) != std::string::npos;)
-      message.erase(at, dir.string().size() + 1);
-    result.problems.push_back({Problem::Severity::kError, "", 0, "", message});
+    result.problems.push_back({Problem::Severity::kError, "", 0, "", server::without_folder(e.what(), dir)});
   }
   return result;
 }
@@ -58,8 +54,7 @@ StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, c
   for (const UploadState& upload : store.uploads(survey_id)) {
     sonar_files_ = sonar_files_ || is_sonar_file_path(upload.name);
     if (!upload.complete || !is_bundle_file(upload.name)) continue;
-    std::ofstream out(scratch_.path() / upload.name, std::ios::binary);
-    store.export_file(survey_id, upload.name, out);
+    store.export_file(survey_id, upload.name, scratch_.path() / upload.name);
   }
   if (sonar_files_) {
     std::optional<SurveyRecord> record = store.survey(survey_id);

@@ -4,9 +4,11 @@
 #include <openssl/rand.h>
 
 #include <algorithm>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 
+#include "core/io/file_bytes.h"
 #include "core/io/problem.h"
 
 namespace bathyslam::storage {
@@ -479,7 +481,7 @@ std::vector<UploadState> SurveyStore::uploads(std::int64_t survey_id) {
   return uploads_on(*connection, survey_id);
 }
 
-void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, std::ostream& out) {
+void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, const std::filesystem::path& to) {
   auto connection = pool_.acquire();
   Result file = connection->exec(
       "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
@@ -487,12 +489,14 @@ void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, s
   if (file.rows() == 0) throw std::out_of_range("survey " + std::to_string(survey_id) + " has no complete file '" + name + "'");
   Sha256Stream digest;
   std::int64_t size = 0;
+  std::ofstream out(to, std::ios::binary);
   for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name, [&](const Bytes& data) {
     digest.add(data);
     size += static_cast<std::int64_t>(data.size());
     out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
+    if (!out) close_checked(out, to);  // at once, while errno still says why
   });
-  if (!out) throw std::runtime_error("survey file '" + name + "': cannot write the copy");
+  close_checked(out, to);
   if (size != file.int64(0, "size_bytes") || digest.finish() != to_sha256(file.bytes(0, "sha256")))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
 }

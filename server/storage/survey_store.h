@@ -5,9 +5,9 @@
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
-#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -150,8 +150,9 @@ class SurveyStore {
                            Sha256Stream* from_start = nullptr);
   std::optional<UploadState> upload_state(std::int64_t survey_id, const std::string& name);
   std::vector<UploadState> uploads(std::int64_t survey_id);
-  // Streams a complete file into `out` chunk by chunk, checking its SHA-256 on the way.
-  void export_file(std::int64_t survey_id, const std::string& name, std::ostream& out);
+  // Copies a complete file to `to` chunk by chunk, checking its SHA-256 on the way. A write the
+  // disk refuses (full, failing) throws WriteError: never a shorter copy for a reader to judge.
+  void export_file(std::int64_t survey_id, const std::string& name, const std::filesystem::path& to);
   // Reassembles a file and checks its size and SHA-256; throws std::out_of_range if there is no
   // such file and std::runtime_error if it does not match what was uploaded.
   Bytes read_file(std::int64_t survey_id, const std::string& name);

@@ -25,14 +25,16 @@ TEST(JobEventBell, AJobsEventsAndStateChangesRingItsBellAndNoOtherJobs) {
   const std::int64_t other = queue.enqueue({survey, "gicp"});
   JobEventBell bell(db.conninfo());
   // Its LISTEN comes up on its own thread: cancel throwaway jobs until one rings.
-  bool listening = false;
-  for (int i = 0; i < 50 && !listening; ++i) {
+  bool heard = false;
+  for (int i = 0; i < 50 && !heard; ++i) {
     const std::int64_t probe = queue.enqueue({survey, "odometry"});
+    const std::uint64_t before = bell.rings(probe);
     queue.cancel(probe);
-    bell.wait(probe, 0, 200ms);
-    listening = bell.rings(probe) > 0;
+    bell.wait(probe, before, 200ms);
+    heard = bell.rings(probe) > before;
   }
-  ASSERT_TRUE(listening) << "the bell never heard a notification";
+  ASSERT_TRUE(heard) << "the bell never heard a notification";
+  const std::uint64_t quiet = bell.rings(other);
 
   std::uint64_t seen = bell.rings(watched);
   std::optional<storage::ClaimedJob> job = queue.claim("w");  // queued -> running
@@ -50,7 +52,28 @@ TEST(JobEventBell, AJobsEventsAndStateChangesRingItsBellAndNoOtherJobs) {
   ASSERT_TRUE(queue.succeed(job->lease));
   bell.wait(watched, seen, 10s);
   EXPECT_GT(bell.rings(watched), seen) << "the final state did not ring";
-  EXPECT_EQ(bell.rings(other), 0u);
+  EXPECT_EQ(bell.rings(other), quiet);
+}
+
+// Issue 37 fault 1: watchers that wait cost the database nothing. While the bell listens, a
+// wait that nothing rang through says so (no need to read the job); a bell that cannot listen
+// has its watchers poll.
+TEST(JobEventBell, AWatcherNeedNotLookWhileTheBellListensAndPollsWhileItCannot) {
+  testing::FreshDatabase db;
+  storage::ConnectionPool pool(db.conninfo(), 1);
+  storage::SurveyStore surveys(pool);
+  storage::JobQueue queue(pool);
+  const std::int64_t job = queue.enqueue({surveys.create_survey(surveys.create_tenant("acme"), "lake", {}), "gicp"});
+  JobEventBell bell(db.conninfo());
+  bell.wait(job, 0, 10s);
+  ASSERT_GT(bell.rings(job), 0u) << "the bell never started listening";  // its start moves every count
+  EXPECT_FALSE(bell.wait(job, bell.rings(job), 300ms)) << "nothing rang, yet the watcher is sent to look";
+  const std::uint64_t seen = bell.rings(job);
+  ASSERT_TRUE(queue.cancel(job));
+  EXPECT_TRUE(bell.wait(job, seen, 10s)) << "the job rang, yet the watcher is not sent to look";
+
+  JobEventBell deaf("host=/nonexistent-socket-folder dbname=none connect_timeout=1");
+  EXPECT_TRUE(deaf.wait(job, deaf.rings(job), 300ms)) << "a bell that cannot listen must have its watchers poll";
 }
 
 }  // namespace

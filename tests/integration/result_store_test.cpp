@@ -291,6 +291,28 @@ TEST(ResultStore, AWorkerThatLostItsLeaseWritesNothing) {
   EXPECT_THROW(current.put_tile(f.job, {"png", 0, 0, 0}, {1}), LeaseLost);
 }
 
+// Withdrawing takes only a cancelled job's results: a running one's (or a reaped one's, which
+// its next attempt discards itself) stay.
+TEST(ResultStore, OnlyACancelledJobsResultsAreWithdrawn) {
+  JobFixture f;
+  std::optional<ClaimedJob> claimed = f.jobs.claim("worker");
+  ASSERT_TRUE(claimed);
+  ResultStore fenced = f.results.fenced(claimed->lease);
+  fenced.save_origin(f.job, {451000, 4629000});
+  fenced.save_submaps(f.job, {a_submap(0, true)});
+  fenced.put_tile(f.job, {"png", 0, 0, 0}, {1});
+  fenced.save_report(f.job, {{{"ok", true}}, {}});
+
+  EXPECT_FALSE(f.results.discard_if_cancelled(f.job));
+  EXPECT_EQ(f.results.load_submaps(f.job).size(), 1u);
+  ASSERT_TRUE(f.jobs.cancel(f.job));
+  EXPECT_TRUE(f.results.discard_if_cancelled(f.job));
+  EXPECT_TRUE(f.results.load_submaps(f.job).empty());
+  EXPECT_TRUE(f.results.tiles(f.job).empty());
+  EXPECT_EQ(f.results.load_report(f.job), std::nullopt);
+  EXPECT_EQ(f.results.origin(f.job), std::nullopt);
+}
+
 TEST(ResultStore, DeletingASurveyRemovesEverythingUnderIt) {
   JobFixture f;
   // A second survey of another tenant, with the same kinds of rows, must survive.

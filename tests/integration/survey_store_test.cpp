@@ -1,6 +1,7 @@
 // Surveys, their files and tenants' tokens.
 #include <gtest/gtest.h>
 
+#include "core/io/file_bytes.h"
 #include "server/storage/survey_store.h"
 #include "tests/integration/fresh_database.h"
 
@@ -38,6 +39,22 @@ TEST(SurveyStore, FilesAreChunkedAndReassembledWithTheirHash) {
   // Storage that no longer matches the upload is noticed, not served.
   db.scalar("WITH c AS (UPDATE survey_file_chunks SET data = 'XXXXXXX' WHERE seq = 1 RETURNING 1) SELECT count(*) FROM c");
   EXPECT_THROW(store.read_file(survey, "nav.csv"), std::runtime_error);
+}
+
+// Issue 37 fault 2: a scratch copy whose tail the disk refused at close (the file fits the
+// stream's buffer) went unnoticed, and FinalizeSurvey judged the cut copy "not valid JSON".
+TEST(SurveyStore, ACopyTheDiskRefusesIsAWriteError) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t survey =
+      store.create_survey(store.create_tenant("acme"), "lake", {{"survey.json", bytes_of(R"({"name": "lake"})")}});
+  try {
+    store.export_file(survey, "survey.json", "/dev/full");  // refuses every write with ENOSPC
+    ADD_FAILURE() << "the copy did not throw";
+  } catch (const WriteError& error) {
+    EXPECT_TRUE(error.out_of_space()) << error.what();
+  }
 }
 
 TEST(SurveyStore, ASurveyInsertThatFailsHalfwayLeavesNothing) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/io/file_bytes.h"
 #include "core/io/gsf/big_endian.h"
 
 namespace bathyslam::gsf {
@@ -65,7 +66,7 @@ void put_array(std::vector<std::uint8_t>& out, const ArrayEncoding& e, const std
 Writer::Writer(const std::filesystem::path& path, const std::string& version)
     : path_(path), temporary_(path.string() + ".partial") {
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
-  if (!out_) throw std::runtime_error(path_.string() + ": cannot write");
+  if (!out_) close_checked(out_, temporary_);
   std::vector<std::uint8_t> header(version.begin(), version.end());
   header.resize(12, 0);  // the version field is 12 characters, NUL-padded
   write_record(kHeader, header);
@@ -93,7 +94,7 @@ void Writer::write_record(std::uint32_t id, std::vector<std::uint8_t>& data) {
   }
   out_.write(reinterpret_cast<const char*>(framing.data()), static_cast<std::streamsize>(framing.size()));
   out_.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
-  if (!out_) throw std::runtime_error(path_.string() + ": write failed");
+  if (!out_) close_checked(out_, temporary_);  // at once, while errno still says why
 }
 
 void Writer::write(const Comment& comment) {
@@ -188,8 +189,7 @@ void Writer::write(const Ping& ping) {
 }
 
 void Writer::close() {
-  out_.close();
-  if (!out_) throw std::runtime_error(path_.string() + ": write failed");
+  close_checked(out_, temporary_);
   std::filesystem::rename(temporary_, path_);
   closed_ = true;
 }
