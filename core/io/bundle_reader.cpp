@@ -63,6 +63,12 @@ bool parse_field(std::string_view text, T& value, std::string_view file, std::si
   return false;
 }
 
+// No projected coordinate in metres lies this far from its CRS's origin: the Earth's circumference
+// is 4.0e7 m, false eastings and northings a few 1e6 m.
+constexpr double kMaxProjectedCoordinate_m = 1e8;
+// Deeper than the deepest ocean (10.9 km), or higher than any vehicle with a multibeam flies.
+constexpr double kMaxVehicleDepth_m = 12000;
+
 bool check_field_count(std::size_t count, std::size_t expected, std::string_view file,
                        std::size_t line, ProblemList& problems) {
   if (count == expected) return true;
@@ -164,6 +170,16 @@ std::vector<NavSample> parse_nav_csv(ByteSource& source, std::string_view file,
       problems.error(std::string(file), n, "time",
                      "goes backwards: " + std::string(fields[0]) + " after " +
                          std::to_string(previous_time));
+    }
+    // Positions and depths no survey can have reach the map as infinite longitudes and cell counts.
+    for (const std::size_t i : {1, 2}) {  // easting, northing
+      if (std::abs(*values[i]) > kMaxProjectedCoordinate_m) {
+        problems.error(std::string(file), n, std::string(kColumns[i]),
+                       quoted_input(fields[i]) + " m is no projected coordinate (beyond ±1e8 m)");
+      }
+    }
+    if (std::abs(s.depth_m) > kMaxVehicleDepth_m) {
+      problems.error(std::string(file), n, "depth", quoted_input(fields[3]) + " m is beyond ±12000 m");
     }
     if (std::abs(s.roll_deg) > 90) problems.error(std::string(file), n, "roll", "outside ±90°");
     if (std::abs(s.pitch_deg) > 90) problems.error(std::string(file), n, "pitch", "outside ±90°");

@@ -247,6 +247,8 @@ class HostileInputTableTest(unittest.TestCase):
             ("nav.csv with a word for a number", {"nav.csv": nav.replace(b"452004,", b"east,", 1)}, r"[\s\S]*nav\.csv:4"),
             ("nav.csv going back in time", {"nav.csv": nav.replace(b"1720000005,", b"1710000005,", 1)}, r"[\s\S]*nav\.csv:7"),
             ("nav.csv with NaN", {"nav.csv": nav.replace(b"452006,4630000,1,", b"452006,4630000,nan,", 1)}, r"[\s\S]*nav\.csv:5: depth: not finite"),
+            ("nav.csv with an easting of 1e300", {"nav.csv": nav.replace(b"452040,4630000", b"1e300,4630000", 1)},
+             r"[\s\S]*nav\.csv:22: easting: '1e300' m is no projected coordinate"),
             ("nav.csv of NUL bytes", {"nav.csv": b"\0" * 4096}, r"[\s\S]*nav\.csv"),
             ("nav.csv with a header only", {"nav.csv": nav.split(b"\n")[0] + b"\n"}, r"[\s\S]*nav\.csv"),
             ("pings.csv with a line over 64 KiB", {"pings.csv": pings + b"1720000005.5,1,0,1," + b"9" * (70 << 10) + b"\n"},

@@ -326,6 +326,18 @@ TEST_F(BundleTest, NavWrongFieldCountAndAttitudeRange) {
   EXPECT_THAT(problems, HasSubstr("nav.csv:5: roll: outside ±90°"));
 }
 
+// A finite number that is no position (issue 37: an easting of 1e300 finalized, then every job
+// failed at the map stage, or ran out of memory offline).
+TEST_F(BundleTest, NavPositionsAndDepthsNoSurveyCanHave) {
+  replace_line(kNavFile, 3, "1720000000.5,1e300,4630000.5,1.25,0.5,-0.25,89.875");
+  replace_line(kNavFile, 4, "1720000001,452002.125,-2e8,1.25,0.5,-0.25,89.875");
+  replace_line(kNavFile, 5, "1720000001.5,452003.125,4630000.5,15000,0.5,-0.25,89.875");
+  const std::string problems = expect_rejected();
+  EXPECT_THAT(problems, HasSubstr("nav.csv:3: easting: '1e300' m is no projected coordinate (beyond ±1e8 m)"));
+  EXPECT_THAT(problems, HasSubstr("nav.csv:4: northing: '-2e8' m is no projected coordinate"));
+  EXPECT_THAT(problems, HasSubstr("nav.csv:5: depth: '15000' m is beyond ±12000 m"));
+}
+
 TEST_F(BundleTest, NavWithoutSamples) {
   write_lines(kNavFile, {std::string(kNavHeader)});
   EXPECT_THAT(expect_rejected(), HasSubstr("nav.csv: needs at least 2 navigation samples, has 0"));
