@@ -127,11 +127,8 @@ grpc::Status JobService::WatchJob(grpc::ServerContext* call, const v1::WatchJobR
     storage::JobRecord job = owned_job(context_, tenant, request->job_id());
     // Held while the stream is open: each holds a server thread, and one tenant's thousands
     // slowed every other tenant's calls to seconds.
-    const std::optional<StreamSlots::Slot> slot = watch_slots_.take(tenant);
-    if (!slot)
-      throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                    "this tenant has " + std::to_string(watch_slots_.per_tenant()) +
-                        " WatchJob streams open, the limit (--max-watch-streams); close one first");
+    const StreamSlots::Slot slot =
+        slot_or_refuse(watch_slots_, tenant, "WatchJob streams open", "--max-watch-streams", "close one first");
     std::int64_t last_event = 0;
     // Until the client goes away (or its deadline passes) or the job ends.
     while (!call->IsCancelled()) {

@@ -132,4 +132,14 @@ grpc::Status handle(const char* method, grpc::ServerContext* call, const std::fu
   }
 }
 
+StreamSlots::Slot slot_or_refuse(StreamSlots& slots, std::int64_t tenant, const std::string& held, const std::string& flag,
+                                 const std::string& advice) {
+  std::optional<StreamSlots::Slot> slot = slots.take(tenant);
+  if (!slot) {
+    throw Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, "this tenant has " + std::to_string(slots.per_tenant()) + " " +
+                                                            held + ", the limit (" + flag + "); " + advice);
+  }
+  return std::move(*slot);
+}
+
 }  // namespace bathyslam::server

@@ -9,6 +9,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "server/services/stream_slots.h"
 #include "server/storage/job_queue.h"
 #include "server/storage/result_store.h"
 #include "server/storage/survey_store.h"
@@ -19,6 +20,8 @@ struct Limits {
   std::int64_t max_file_bytes = std::int64_t{8} << 30;  // one uploaded file
   int max_active_jobs = 16;                              // queued + running, per tenant
   int max_watch_streams = 64;                            // open WatchJob streams per tenant, per server
+  int max_upload_streams = 8;                            // UploadFile streams in progress per tenant, per server
+  int max_finalizes = 2;                                 // FinalizeSurvey calls in progress per tenant, per server
   int max_attempts = 2;                                  // per job: a crashed worker's job runs once more
   // Cells of one survey's map (1e8: 5 km × 5 km at 0.5 m, 1.2 GB for its three float bands).
   std::uint64_t max_map_cells = 100'000'000;
@@ -42,6 +45,11 @@ class Refusal : public std::runtime_error {
  private:
   grpc::StatusCode code_;
 };
+
+// A slot of `slots` for the tenant's call, or RESOURCE_EXHAUSTED naming the limit: "this tenant
+// has N <held>, the limit (<flag>); <advice>".
+StreamSlots::Slot slot_or_refuse(StreamSlots& slots, std::int64_t tenant, const std::string& held, const std::string& flag,
+                                 const std::string& advice);
 
 // INVALID_ARGUMENT "field: message".
 Refusal invalid(const std::string& field, const std::string& message);

@@ -177,6 +177,8 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     const std::string& name = first.file_name();
     owned_survey(context_, tenant, survey_id);
     check_declaration(first, context_.limits);
+    const StreamSlots::Slot slot = slot_or_refuse(upload_slots_, tenant, "UploadFile streams in progress",
+                                                  "--max-upload-streams", "let one finish first");
     storage::Sha256 digest{};
     std::copy(first.sha256().begin(), first.sha256().end(), digest.begin());
     check_first_offset(context_.surveys, survey_id, first, digest);
@@ -219,8 +221,11 @@ grpc::Status SurveyService::GetUploadStatus(grpc::ServerContext* call, const v1:
 grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::FinalizeSurveyRequest* request,
                                            v1::Survey* reply) {
   return handle("FinalizeSurvey", call, [&] {
-    const storage::SurveyRecord survey = owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    const storage::SurveyRecord survey = owned_survey(context_, tenant, request->survey_id());
     if (survey.ready) return describe(survey, true, reply);  // finalizing twice changes nothing
+    const StreamSlots::Slot slot = slot_or_refuse(finalize_slots_, tenant, "FinalizeSurvey calls in progress",
+                                                  "--max-finalizes", "try again when one ends");
     nlohmann::json problems = nlohmann::json::array();
     bool errors = false;
     const std::vector<storage::UploadState> uploads = context_.surveys.uploads(survey.id);  // what is validated

@@ -4,12 +4,17 @@
 
 #include "bathyslam/v1/survey.grpc.pb.h"
 #include "server/services/service_context.h"
+#include "server/services/stream_slots.h"
 
 namespace bathyslam::server {
 
 class SurveyService final : public v1::SurveyService::Service {
  public:
-  SurveyService(ServiceContext& context, std::filesystem::path scratch) : context_(context), scratch_(std::move(scratch)) {}
+  SurveyService(ServiceContext& context, std::filesystem::path scratch)
+      : context_(context),
+        scratch_(std::move(scratch)),
+        upload_slots_(context.limits.max_upload_streams),
+        finalize_slots_(context.limits.max_finalizes) {}
 
   grpc::Status CreateSurvey(grpc::ServerContext* call, const v1::CreateSurveyRequest* request, v1::Survey* reply) override;
   grpc::Status UploadFile(grpc::ServerContext* call, grpc::ServerReader<v1::UploadFileRequest>* reader,
@@ -28,6 +33,11 @@ class SurveyService final : public v1::SurveyService::Service {
 
   ServiceContext& context_;
   std::filesystem::path scratch_;  // where FinalizeSurvey copies a bundle to parse it
+  // Each upload stream holds a server thread and a pool connection per chunk; each finalize a
+  // copy of the survey on the scratch disk and a pool connection: one tenant's dozens of them
+  // slowed every other tenant's calls to seconds (issue 37).
+  StreamSlots upload_slots_;
+  StreamSlots finalize_slots_;
 };
 
 }  // namespace bathyslam::server

@@ -11,6 +11,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import unittest
 
@@ -552,6 +553,59 @@ class WatchStreamLimitTest(unittest.TestCase):
                              "the closed stream's slot never came back")
         for stream in streams:
             stream.cancel()
+
+
+class UploadStreamLimitTest(unittest.TestCase):
+    """Issue 37 fault 3: a tenant's upload streams in progress are bounded (--max-upload-streams),
+    the stream past the limit refused RESOURCE_EXHAUSTED naming it, the others unharmed, and a
+    finished stream's slot comes back. Each held stream sends its first chunk and waits."""
+
+    def setUp(self):
+        self.server = Server(args=["--workers", "0", "--max-upload-streams", "2"])
+        self.release = threading.Event()
+
+    def tearDown(self):
+        self.release.set()
+        self.server.stop()
+
+    def held(self, survey_id, name, data):
+        """An upload stream that sends its first chunk, then waits for `release` before the rest."""
+        requests = upload_requests(survey_id, name, data)
+        yield next(requests)
+        self.release.wait(60)
+        yield from requests
+
+    def probe(self, survey_id, number):
+        """A one-byte upload of its own file: its status code."""
+        try:
+            self.server.surveys.UploadFile(upload_requests(survey_id, f"probe-{number}.gsf", b"x"), timeout=30)
+            return grpc.StatusCode.OK, ""
+        except grpc.RpcError as error:
+            return error.code(), error.details()
+
+    def test_a_tenants_upload_streams_are_bounded(self):
+        surveys = self.server.surveys
+        survey_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="held", crs="EPSG:32651"), timeout=30).id
+        calls = [surveys.UploadFile.future(self.held(survey_id, name, bytes(3 * CHUNK)), timeout=60)
+                 for name in ("nav.csv", "pings.csv")]
+        # A held stream has its slot once its first chunk is stored (the slot is taken before it).
+        def committed(name):
+            try:
+                return surveys.GetUploadStatus(survey_pb2.GetUploadStatusRequest(survey_id=survey_id, file_name=name),
+                                               timeout=30).committed_bytes
+            except grpc.RpcError as error:
+                self.assertEqual(error.code(), grpc.StatusCode.NOT_FOUND)  # not declared yet
+                return 0
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not all(committed(name) == CHUNK for name in ("nav.csv", "pings.csv")):
+            time.sleep(0.1)
+        self.assertEqual(self.probe(survey_id, 1), (grpc.StatusCode.RESOURCE_EXHAUSTED,
+                                                    "this tenant has 2 UploadFile streams in progress, the limit "
+                                                    "(--max-upload-streams); let one finish first"))
+        self.release.set()
+        for call in calls:
+            self.assertTrue(call.result().complete)
+        self.assertEqual(self.probe(survey_id, 2)[0], grpc.StatusCode.OK)  # the slots came back
 
 
 class IdleWatchersTest(unittest.TestCase):
