@@ -7,6 +7,7 @@ diagnosis (survey_validations, which GetSurvey lists) and changes nothing else; 
 left out of the comparison for those cases, and the survey checked still UPLOADING. The same
 environment as service_api_test.py (set by ctest)."""
 import hashlib
+import os
 import re
 import unittest
 from concurrent.futures import ThreadPoolExecutor
@@ -270,8 +271,25 @@ class HostileInputTableTest(unittest.TestCase):
              r"[\s\S]*nav\.csv: easting, northing: the survey covers \d+ m × \d+ m: a map of \d+ cells at [\d.]+ m,"
              " over the limit of 100000000"),
         ]
+        with open(os.path.join(os.environ["ALL_DATA"], "0243_P007_MBES_EM122_20150207_044356_Supporter_GA4430.all"),
+                  "rb") as f:
+            em122 = f.read()
+        flipped = bytearray(em122)
+        flipped[em122.index(b"\x02X") + 100] ^= 0x10  # inside the first XYZ 88 datagram's body
+        sonar_files = [
+            ("an .all file cut short", {"em122.all": em122[:100000]},
+             r"[\s\S]*em122\.all:\d+: datagram length: \d+ bytes run past the end of the file"),
+            ("an .all datagram with a wrong checksum", {"em122.all": bytes(flipped)},
+             r"[\s\S]*em122\.all:\d+: checksum: the bytes sum to \d+, the datagram says \d+"),
+            ("an .all file of another format's bytes", {"em122.all": b"\0" * 4096},
+             r"[\s\S]*em122\.all:0: datagram length: 0 bytes is shorter than a datagram's frame"),
+            ("a .gsf and an .all file in one survey", {"a.gsf": b"\0" * 64, "em122.all": em122},
+             r"[\s\S]*must be of one format"),
+        ]
         finalize = [Case(name, self.finalize_bundle(tiny_bundle(**files)), INVALID, r"survey \d+ is not valid:" + pattern, True)
                     for name, files, pattern in bundles]
+        finalize += [Case(name, self.finalize_bundle(files), INVALID, r"survey \d+ is not valid:" + pattern, True)
+                     for name, files, pattern in sonar_files]
         return upload + requests + finalize
 
     def test_the_control_bundle_is_valid(self):
