@@ -47,6 +47,13 @@ LoadedSurvey read_sonar_files(InputKind kind, const SurveyInput& input) {
   return loaded;
 }
 
+// kind_of for callers that take sonar files only: a bundle is refused naming it.
+InputKind sonar_kind_of(const SurveyInput& input) {
+  const InputKind kind = kind_of(input);
+  if (kind == InputKind::kBundle) throw std::runtime_error(input.paths.front().string() + ": not a sonar file (.gsf, .all)");
+  return kind;
+}
+
 }  // namespace
 
 bool is_sonar_file_path(const std::filesystem::path& path) {
@@ -73,15 +80,14 @@ LoadedSurvey load_survey(const SurveyInput& input, PingSink& sink) {
 }
 
 LoadedSurvey read_sonar_navigation(const SurveyInput& input) {
-  const InputKind kind = kind_of(input);
-  if (kind == InputKind::kBundle) throw std::runtime_error(input.paths.front().string() + ": not a sonar file (.gsf, .all)");
+  const InputKind kind = sonar_kind_of(input);
   SurveyInput navigation_only = input;
   navigation_only.keep_soundings = false;
   return read_sonar_files(kind, navigation_only);
 }
 
 void stream_sonar_soundings(const SurveyInput& input, Survey& survey, PingSink& sink) {
-  if (kind_of(input) == InputKind::kGsf) gsf::stream_soundings(input.paths, survey, sink);
+  if (sonar_kind_of(input) == InputKind::kGsf) gsf::stream_soundings(input.paths, survey, sink);
   else kongsberg::stream_soundings(input.paths, survey, sink);
 }
 
@@ -93,8 +99,7 @@ bool is_sonar_file_name(const std::string& name) {
 }
 
 std::vector<std::filesystem::path> sonar_files_in_time_order(std::vector<std::filesystem::path> files) {
-  const InputKind kind = kind_of(SurveyInput{files, "", std::nullopt, false});
-  if (kind == InputKind::kBundle) throw std::runtime_error(files.front().string() + ": not a sonar file (.gsf, .all)");
+  const InputKind kind = sonar_kind_of(SurveyInput{files, "", std::nullopt, false});
   // Files without a ping go last, by name.
   std::vector<std::pair<double, std::filesystem::path>> timed;
   for (std::filesystem::path& path : files) {

@@ -149,7 +149,8 @@ TEST(AllReader, DamageIsAnErrorNamingFileOffsetAndField) {
   std::string huge = good;
   huge[3] = '\x7f';
   EXPECT_THAT(error_of(huge), testing::HasSubstr("over the"));
-  EXPECT_THAT(error_of(le(5, 4) + "\x02xxxx"), testing::HasSubstr("shorter than a datagram's frame"));
+  const std::string five_byte_datagram = le(5, 4) + "\x02" + "abcd";  // a length under the 19-byte frame
+  EXPECT_THAT(error_of(five_byte_datagram), testing::HasSubstr("x.all:0: datagram length: 5 bytes is shorter than a datagram's frame"));
   // One byte of the body changed: the checksum no longer adds up.
   std::string flipped = good;
   flipped[40] ^= 0x10;

@@ -27,6 +27,8 @@ constexpr std::size_t kOrderWindow = 64;
 constexpr std::size_t kMaxKeptInstallationText = 4096;
 constexpr std::size_t kMaxKeptProfiles = 20;  // as for GSF: metadata per survey is bounded
 
+std::string utc(double seconds) { return format_utc(seconds, "%Y-%m-%dT%H:%M:%SZ"); }
+
 // An XYZ 88 swath between the datagram and the survey.
 struct Swath {
   double time = 0;
@@ -46,7 +48,7 @@ class TimeOrder {
   // `swath` in; the swaths now due (held beyond the window) appended to `due` in time order.
   void push(Swath swath, std::vector<Swath>& due, const std::string& where) {
     if (swath.time < last_) {
-      throw std::runtime_error(where + ": swath at " + format_utc(swath.time, "%Y-%m-%dT%H:%M:%SZ") +
+      throw std::runtime_error(where + ": swath at " + utc(swath.time) +
                                " comes more than " + std::to_string(kOrderWindow) +
                                " swaths after later ones; give the files in time order");
     }
@@ -225,8 +227,8 @@ nlohmann::json to_json(const FileSummary& s) {
           {"installation_parameters", s.installation},
           {"sound_speed_profiles", s.sound_speed_profiles},
           {"skipped_datagrams", s.skipped_datagrams},
-          {"time_begin", format_utc(s.time_begin, "%Y-%m-%dT%H:%M:%SZ")},
-          {"time_end", format_utc(s.time_end, "%Y-%m-%dT%H:%M:%SZ")},
+          {"time_begin", utc(s.time_begin)},
+          {"time_end", utc(s.time_end)},
           {"latitude_deg", {s.latitude_min, s.latitude_max}},
           {"longitude_deg", {s.longitude_min, s.longitude_max}},
           {"depth_m", {s.depth_min_m, s.depth_max_m}}};
@@ -242,8 +244,8 @@ std::string to_text(const FileSummary& s) {
                 static_cast<unsigned long long>(s.swaths_outside_navigation)) +
          format("  soundings   %llu of %llu beams (%llu rejected)\n", static_cast<unsigned long long>(s.soundings),
                 static_cast<unsigned long long>(s.beams), static_cast<unsigned long long>(s.rejected_beams)) +
-         format("  time        %s .. %s\n", format_utc(s.time_begin, "%Y-%m-%dT%H:%M:%SZ").c_str(),
-                format_utc(s.time_end, "%Y-%m-%dT%H:%M:%SZ").c_str()) +
+         format("  time        %s .. %s\n", utc(s.time_begin).c_str(),
+                utc(s.time_end).c_str()) +
          format("  latitude    %.5f .. %.5f\n  longitude   %.5f .. %.5f\n", s.latitude_min, s.latitude_max,
                 s.longitude_min, s.longitude_max) +
          format("  depth       %.1f .. %.1f m\n", s.depth_min_m, s.depth_max_m) +
@@ -316,7 +318,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
       const auto en = projection->forward(fix->second, fix->first);
       if (!std::isfinite(en.easting) || !std::isfinite(en.northing)) {
         throw std::runtime_error(files[s.file].string() + ": cannot project the position at " +
-                                 format_utc(s.time, "%Y-%m-%dT%H:%M:%SZ") + " into " + crs);
+                                 utc(s.time) + " into " + crs);
       }
       const auto [roll, pitch] = motion.at(s.time);
       survey.nav.push_back({s.time, en.easting, en.northing, s.transducer_depth_m, roll, pitch, s.heading_deg});
