@@ -42,12 +42,14 @@ void inspect_sonar_files(const InspectOptions& o) {
     nlohmann::json files = nlohmann::json::array();
     for (const gsf::FileSummary& f : loaded.gsf_files) files.push_back(gsf::to_json(f));
     for (const kongsberg::FileSummary& f : loaded.all_files) files.push_back(kongsberg::to_json(f));
-    const char* key = loaded.all_files.empty() ? "gsf_files" : "all_files";
+    for (const xtf::FileSummary& f : loaded.xtf_files) files.push_back(xtf::to_json(f));
+    const char* key = !loaded.all_files.empty() ? "all_files" : !loaded.xtf_files.empty() ? "xtf_files" : "gsf_files";
     std::printf("%s\n", nlohmann::json{{key, files}, {"survey", to_json(summary)}}.dump(2).c_str());
     return;
   }
   for (const gsf::FileSummary& f : loaded.gsf_files) std::printf("%s", gsf::to_text(f).c_str());
   for (const kongsberg::FileSummary& f : loaded.all_files) std::printf("%s", kongsberg::to_text(f).c_str());
+  for (const xtf::FileSummary& f : loaded.xtf_files) std::printf("%s", xtf::to_text(f).c_str());
   std::printf("%s", to_text(summary).c_str());
 }
 
@@ -55,7 +57,7 @@ void run_inspect(const InspectOptions& o) {
   const std::vector<std::string>& inputs = o.survey.inputs;
   if (inputs.size() == 1 && !is_sonar_file_path(inputs.front())) {
     if (!o.survey.crs.empty() || !o.survey.reference_nav.empty()) {
-      throw std::runtime_error("--crs and --reference-nav are for sonar files (.gsf, .all)");
+      throw std::runtime_error("--crs and --reference-nav are for sonar files (.gsf, .all, .xtf)");
     }
     inspect_bundle(inputs.front(), o.json);
   } else {
@@ -67,7 +69,7 @@ void run_inspect(const InspectOptions& o) {
 
 void add_inspect_command(CLI::App& app) {
   auto options = std::make_shared<InspectOptions>();
-  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle, GSF or Kongsberg .all files) and summarise it");
+  CLI::App* cmd = app.add_subcommand("inspect", "Validate a survey (bundle, GSF, Kongsberg .all or XTF files) and summarise it");
   add_survey_options(cmd, options->survey);
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->callback([options] { run_inspect(*options); });

@@ -36,7 +36,7 @@ struct ProcessOptions {
 };
 
 // GSF input: each file copied with the corrected navigation in its ping headers
-// (OUT/<name>.corrected.gsf); a bundle or .all files: their pings written as OUT/corrected.gsf.
+// (OUT/<name>.corrected.gsf); a bundle, .all or .xtf files: their pings written as OUT/corrected.gsf.
 // The bundle's file is the one the service stores for a job.
 void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineResult& result,
                 const std::vector<NavSample>& corrected) {

@@ -20,7 +20,7 @@
 #include "client/remote.h"
 #include "core/io/bundle.h"
 #include "core/io/bundle_files.h"
-#include "core/io/gsf/gsf_survey.h"
+#include "core/io/file_extension.h"
 #include "core/io/survey_input.h"
 
 namespace bathyslam::cli {
@@ -103,7 +103,7 @@ std::vector<LocalFile> sonar_files(const UploadOptions& o, Declaration& declared
   for (const std::string& input : o.inputs) {
     const std::string name = std::filesystem::path(input).filename().string();
     if (!is_sonar_file_name(name))
-      throw std::runtime_error(input + ": a sonar file name must be letters, digits, '.', '_' or '-' and end in .gsf or .all");
+      throw std::runtime_error(input + ": a sonar file name must be letters, digits, '.', '_' or '-' and end in .gsf, .all or .xtf");
     out.push_back(local(input, name));
   }
   if (!o.reference_nav.empty()) out.push_back(local(o.reference_nav, std::string(kReferenceNavFile)));
@@ -224,11 +224,12 @@ auto retrying(const UploadOptions& o, Step&& step) {
 void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
-  const bool gsf = std::all_of(o.inputs.begin(), o.inputs.end(), [](const std::string& p) { return gsf::is_gsf_path(p); });
-  const bool all = std::all_of(o.inputs.begin(), o.inputs.end(), [](const std::string& p) { return kongsberg::is_all_path(p); });
-  const bool sonar = gsf || all;
+  // Sonar files of one format: each is a sonar file with the first one's extension.
+  const std::string format = lowercase_extension(o.inputs.front());
+  const bool sonar = std::all_of(o.inputs.begin(), o.inputs.end(),
+                                 [&](const std::string& p) { return is_sonar_file_path(p) && has_extension(p, format); });
   if (!sonar && o.inputs.size() > 1)
-    throw std::runtime_error("several inputs must all be sonar files of one format (.gsf or .all); a bundle comes alone");
+    throw std::runtime_error("several inputs must all be sonar files of one format (.gsf, .all or .xtf); a bundle comes alone");
   if (!sonar && (!o.crs.empty() || !o.reference_nav.empty()))
     throw std::runtime_error("--crs and --reference-nav are for sonar files; a bundle has survey.json and reference_nav.csv");
   Declaration declared;

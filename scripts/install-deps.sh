@@ -4,7 +4,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config git ca-certificates
-  clang libclang-rt-14-dev  # the GSF reader's libFuzzer target (scripts/fuzz-gsf.sh)
+  clang libclang-rt-14-dev  # the GSF reader's libFuzzer target (scripts/fuzz-sonar.sh gsf)
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libeigen3-dev libpcl-dev libceres-dev libopencv-dev
   libpq-dev postgresql postgresql-contrib

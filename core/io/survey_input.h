@@ -1,6 +1,6 @@
 #pragma once
 // What a user may hand bathyslam as a survey: a bundle (folder or .tar), or one or more sonar
-// files of one format (GSF, or Kongsberg EM .all) in time order with an optional reference
+// files of one format (GSF, Kongsberg EM .all or XTF) in time order with an optional reference
 // navigation CSV.
 #include <filesystem>
 #include <optional>
@@ -10,6 +10,7 @@
 #include "core/io/bundle.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/io/kongsberg/all_survey.h"
+#include "core/io/xtf/xtf_survey.h"
 #include "core/types/survey.h"
 
 namespace bathyslam {
@@ -25,12 +26,13 @@ struct LoadedSurvey {
   Survey survey;
   std::vector<gsf::FileSummary> gsf_files;  // empty but for GSF input
   std::vector<kongsberg::FileSummary> all_files;  // empty but for .all input
+  std::vector<xtf::FileSummary> xtf_files;        // empty but for XTF input
 };
 
-// Whether `path` names a sonar file bathyslam reads (GSF or .all), by its extension.
+// Whether `path` names a sonar file bathyslam reads (GSF, .all or .xtf), by its extension.
 bool is_sonar_file_path(const std::filesystem::path& path);
 
-// Whether `name` may name an uploaded sonar file: a plain file name ending in .gsf or .all, of
+// Whether `name` may name an uploaded sonar file: a plain file name ending in .gsf, .all or .xtf, of
 // letters, digits, '.', '_' and '-', not starting with '.', at most 200 characters (it becomes a
 // path on the server).
 bool is_sonar_file_name(const std::string& name);
@@ -45,7 +47,7 @@ std::vector<std::filesystem::path> sonar_files_in_time_order(std::vector<std::fi
 LoadedSurvey read_sonar_navigation(const SurveyInput& input);
 void stream_sonar_soundings(const SurveyInput& input, Survey& survey, PingSink& sink);
 
-// Reads the survey; throws BundleError, gsf::GsfError, kongsberg::AllError or std::runtime_error
+// Reads the survey; throws BundleError, gsf::GsfError, kongsberg::AllError, xtf::XtfError or std::runtime_error
 // naming the input. Sonar-file options given with a bundle, a bundle given with other paths, and
 // files of two formats are refused.
 LoadedSurvey load_survey(const SurveyInput& input);

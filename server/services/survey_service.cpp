@@ -81,7 +81,7 @@ void check_declaration(const v1::UploadFileRequest& message, const Limits& limit
   const std::string& name = message.file_name();
   check_text("file_name", name);
   if (!storage::is_bundle_file(name))
-    throw invalid("file_name", quoted_input(name) + " is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, NAME.gsf or NAME.all)");
+    throw invalid("file_name", quoted_input(name) + " is not a survey file (survey.json, nav.csv, pings.csv, reference_nav.csv, NAME.gsf, NAME.all or NAME.xtf)");
   if (message.sha256().size() != 32) throw invalid("sha256", "must be the 32 bytes of the file's SHA-256");
   if (message.size_bytes() < 0) throw invalid("size_bytes", "must not be negative");
   if (message.offset() < 0) throw invalid("offset", "must not be negative");

@@ -21,7 +21,7 @@ bool is_bundle_file(const std::string& name) {
 
 namespace {
 
-// Sonar-file uploads (GSF or EM .all): the files in the time order of their first pings,
+// Sonar-file uploads (GSF, EM .all or XTF): the files in the time order of their first pings,
 // reference_nav.csv when uploaded; name, CRS (empty: the data's UTM zone), sonar and vehicle from
 // CreateSurvey. A damaged file is one problem naming the file and where in it. The pings go to
 // `sink` (the files read twice, the soundings never held whole) and the survey comes back without

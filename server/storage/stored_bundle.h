@@ -12,7 +12,7 @@
 namespace bathyslam::storage {
 
 // The files a survey may hold: a bundle's, or sonar files of one format (plain names ending in
-// .gsf or .all) with an optional reference_nav.csv; others are refused at upload.
+// .gsf, .all or .xtf) with an optional reference_nav.csv; others are refused at upload.
 bool is_bundle_file(const std::string& name);
 
 // A survey's complete uploaded files copied into a scratch folder for as long as this lives, so

@@ -1,5 +1,5 @@
 // libFuzzer target for the Kongsberg .all reader: any bytes must end in datagrams or an AllError,
-// never a crash, a hang, a leak or a sanitizer report. Built and run by scripts/fuzz-all.sh.
+// never a crash, a hang, a leak or a sanitizer report. Built and run by scripts/fuzz-sonar.sh all.
 // Each intact frame's checksum is set right before reading: a mutated body would otherwise stop
 // at the checksum and the decoders behind it would never be reached.
 #include <cstddef>

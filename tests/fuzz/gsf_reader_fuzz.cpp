@@ -1,5 +1,5 @@
 // libFuzzer target for the GSF reader: any bytes must end in records or a GsfError, never a
-// crash, a hang, a leak or a sanitizer report. Built and run by scripts/fuzz-gsf.sh.
+// crash, a hang, a leak or a sanitizer report. Built and run by scripts/fuzz-sonar.sh gsf.
 #include <cstddef>
 #include <cstdint>
 #include <string_view>

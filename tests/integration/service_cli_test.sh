@@ -129,6 +129,14 @@ all_job=$("$BATHYSLAM" submit "$(awk '/^survey .* ready$/ {print $2}' "$work/all
 grep -q "job $all_job succeeded" "$work/all_watch" || fail "$(cat "$work/all_watch")"
 "$BATHYSLAM" map "$all_job" --format gsf --out "$work/all_job.gsf" > /dev/null || fail "map --format gsf of the .all job"
 "$BATHYSLAM" inspect "$work/all_job.gsf" | grep -q "depth       3479.9 .. 3661.1 m" || fail "the .all job's corrected GSF"
+# An XTF file (R2Sonic via QINSy) the same way: 923 pings in, 923 pings with corrected navigation out.
+"$BATHYSLAM" upload "$XTF_DATA/0009_150708_R2Testing_0001.xtf" --name real-xtf \
+  > "$work/xtf1" 2> "$work/xtf1.err" || fail ".xtf upload: $(cat "$work/xtf1.err")"
+xtf_job=$("$BATHYSLAM" submit "$(awk '/^survey .* ready$/ {print $2}' "$work/xtf1")" --config mchs | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$xtf_job" > "$work/xtf_watch" 2> /dev/null || fail "watch: $(cat "$work/xtf_watch")"
+grep -q "job $xtf_job succeeded" "$work/xtf_watch" || fail "$(cat "$work/xtf_watch")"
+"$BATHYSLAM" map "$xtf_job" --format gsf --out "$work/xtf_job.gsf" > /dev/null || fail "map --format gsf of the .xtf job"
+"$BATHYSLAM" inspect "$work/xtf_job.gsf" | grep -q "^  pings  *923 " || fail "the .xtf job's corrected GSF: $("$BATHYSLAM" inspect "$work/xtf_job.gsf")"
 head -c 5000 "$GSF_DATA/gsfpy_test_data.gsf" > "$work/cut.gsf"
 if "$BATHYSLAM" upload "$work/cut.gsf" 2> "$work/cut.err"; then fail "a truncated GSF file was accepted"; fi
 grep -q "cut.gsf: record 7 at byte 4000: truncated" "$work/cut.err" || fail "$(cat "$work/cut.err")"

@@ -1,5 +1,7 @@
 #include "core/io/gsf/gsf_survey.h"
 
+#include "core/io/file_extension.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -412,9 +414,7 @@ std::optional<double> first_ping_time(const std::filesystem::path& path) {
 }
 
 bool is_gsf_path(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".gsf";
+  return has_extension(path, ".gsf");
 }
 
 }  // namespace bathyslam::gsf

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/bundle.h"
+#include "core/io/sonar_read.h"
 #include "core/io/byte_source.h"
 #include "core/io/crs.h"
 #include "core/types/survey.h"
@@ -49,18 +50,8 @@ struct FileSummary {
 nlohmann::json to_json(const FileSummary& summary);
 std::string to_text(const FileSummary& summary);
 
-struct ReadOptions {
-  std::string crs;  // "EPSG:<code>"; empty: the WGS 84 UTM zone of the first ping
-  std::optional<std::filesystem::path> reference_nav;  // a nav.csv-format file
-  // false: every ping keeps its sounding count but no sounding is kept (Survey::beams stays
-  // empty), so that a summary needs the memory of the navigation, not of the soundings.
-  bool keep_soundings = true;
-};
-
-struct SurveyRead {
-  Survey survey;
-  std::vector<FileSummary> files;
-};
+using ReadOptions = SonarReadOptions;
+using SurveyRead = SonarRead<FileSummary>;
 
 // Reads `files` (in time order) into one survey; throws GsfError for a damaged file,
 // std::runtime_error for pings out of time order or an unusable CRS.

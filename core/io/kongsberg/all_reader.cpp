@@ -3,62 +3,13 @@
 
 #include "core/io/kongsberg/all_datagrams.h"
 
+#include "core/io/binary_fields.h"
+
 namespace bathyslam::kongsberg {
 namespace {
 
-// A field that is not what the format allows; the reader adds the file and the offset.
-struct BadField {
-  std::string field, what;
-};
-
-// Little-endian fields of one datagram (from its STX), bounds-checked.
-class Cursor {
- public:
-  Cursor(const std::string& bytes, std::size_t at) : bytes_(bytes), at_(at) {}
-  std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(take(1, field)[0]); }
-  std::int8_t i8(const char* field) { return static_cast<std::int8_t>(u8(field)); }
-  std::uint16_t u16(const char* field) {
-    const auto* p = reinterpret_cast<const unsigned char*>(take(2, field));
-    return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-  }
-  std::int16_t i16(const char* field) { return static_cast<std::int16_t>(u16(field)); }
-  std::uint32_t u32(const char* field) {
-    const auto* p = reinterpret_cast<const unsigned char*>(take(4, field));
-    return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24);
-  }
-  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
-  float f32(const char* field) {
-    const std::uint32_t bits = u32(field);
-    float value;
-    std::memcpy(&value, &bits, sizeof value);
-    return value;
-  }
-  void skip(std::size_t n, const char* field) { take(n, field); }
-  std::size_t position() const { return at_; }
-
- private:
-  const char* take(std::size_t n, const char* field) {
-    // The body ends before ETX and the checksum.
-    if (at_ + n + 3 > bytes_.size()) {
-      throw BadField{field, "runs past the end of the " + std::to_string(bytes_.size()) + "-byte datagram"};
-    }
-    const char* p = bytes_.data() + at_;
-    at_ += n;
-    return p;
-  }
-  const std::string& bytes_;
-  std::size_t at_;
-};
-
-// Days from 1970-01-01 to a civil date (Howard Hinnant's algorithm).
-std::int64_t days_from_civil(int y, int m, int d) {
-  y -= m <= 2;
-  const int era = (y >= 0 ? y : y - 399) / 400;
-  const int yoe = y - era * 400;
-  const int doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-  return static_cast<std::int64_t>(era) * 146097 + doe - 719468;
-}
+// The body of a datagram: from after its header to before ETX and the checksum.
+FieldCursor body_cursor(const std::string& bytes) { return FieldCursor(bytes, 2, bytes.size() - 3, ByteOrder::kLittle); }
 
 double epoch_seconds(std::uint32_t date, std::uint32_t ms) {
   const int year = static_cast<int>(date / 10000), month = static_cast<int>(date / 100 % 100),
@@ -70,7 +21,7 @@ double epoch_seconds(std::uint32_t date, std::uint32_t ms) {
   return static_cast<double>(days_from_civil(year, month, day)) * 86400.0 + ms / 1000.0;
 }
 
-DepthPing xyz88(Cursor& c, double time, std::uint16_t counter, std::uint16_t serial) {
+DepthPing xyz88(FieldCursor& c, double time, std::uint16_t counter, std::uint16_t serial) {
   DepthPing p;
   p.time = time;
   p.counter = counter;
@@ -95,7 +46,7 @@ DepthPing xyz88(Cursor& c, double time, std::uint16_t counter, std::uint16_t ser
   return p;
 }
 
-Position position(Cursor& c, double time) {
+Position position(FieldCursor& c, double time) {
   Position p;
   p.time = time;
   p.latitude_deg = c.i32("latitude") / 2.0e7;
@@ -110,7 +61,7 @@ Position position(Cursor& c, double time) {
   return p;
 }
 
-Attitude attitude(Cursor& c, double time) {
+Attitude attitude(FieldCursor& c, double time) {
   Attitude a;
   const std::uint16_t n = c.u16("number of entries");
   for (std::uint16_t i = 0; i < n; ++i) {
@@ -124,7 +75,7 @@ Attitude attitude(Cursor& c, double time) {
   return a;
 }
 
-SoundSpeedProfile sound_speed_profile(Cursor& c) {
+SoundSpeedProfile sound_speed_profile(FieldCursor& c) {
   SoundSpeedProfile p;
   p.date = c.u32("profile date");
   p.time_ms = c.u32("profile time");
@@ -137,12 +88,9 @@ SoundSpeedProfile sound_speed_profile(Cursor& c) {
   return p;
 }
 
-Installation installation(Cursor& c, const std::string& bytes) {
+Installation installation(FieldCursor& c) {
   c.skip(2 + 2, "line number, second head serial");
-  const std::size_t begin = c.position(), end = bytes.size() - 3;  // before ETX and the checksum
-  std::string text = bytes.substr(begin, end - begin);
-  text.resize(std::strlen(text.c_str()));  // NUL-terminated, then padding
-  return {text};
+  return {c.text(c.left(), "installation text")};  // NUL-terminated, then padding
 }
 
 }  // namespace
@@ -194,7 +142,7 @@ std::optional<Datagram> Reader::next() {
   }
   const std::uint8_t type = byte(1);
   try {
-    Cursor c(bytes_, 2);
+    FieldCursor c = body_cursor(bytes_);
     model_ = c.u16("EM model");
     const std::uint32_t date = c.u32("date"), ms = c.u32("time");
     const std::uint16_t counter = c.u16("counter"), serial = c.u16("serial number");
@@ -202,7 +150,7 @@ std::optional<Datagram> Reader::next() {
       case kXyz88: return xyz88(c, epoch_seconds(date, ms), counter, serial);
       case kPosition: return position(c, epoch_seconds(date, ms));
       case kAttitude: return attitude(c, epoch_seconds(date, ms));
-      case kInstallationStart: return installation(c, bytes_);
+      case kInstallationStart: return installation(c);
       case kSoundSpeedProfile: return sound_speed_profile(c);
       default: return Skipped{type};
     }

@@ -5,14 +5,14 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <memory>
 #include <set>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
 
-#include "core/io/crs.h"
+#include "core/io/file_extension.h"
 #include "core/io/kongsberg/all_datagrams.h"
+#include "core/io/sonar_tracks.h"
 #include "core/types/format.h"
 #include "core/types/pose.h"
 
@@ -71,69 +71,28 @@ class TimeOrder {
   double last_ = -std::numeric_limits<double>::infinity();
 };
 
-// The active positioning system's fixes, interpolated at a time inside their span.
-class Fixes {
+// The positioning system the sonar used in real time (descriptor bit 7); files that flag none: the
+// lowest-numbered.
+class ActiveSystem {
  public:
-  explicit Fixes(const std::vector<Position>& all) {
-    // The system the sonar used in real time; files that flag none: the lowest-numbered.
+  explicit ActiveSystem(const std::vector<Position>& all) {
     any_active_ = std::any_of(all.begin(), all.end(), [](const Position& p) { return p.active; });
     for (const Position& p : all) lowest_ = std::min(lowest_, p.system);
-    for (const Position& p : all) {
-      if (uses(p)) fixes_.push_back(p);
-    }
-    std::stable_sort(fixes_.begin(), fixes_.end(), [](const Position& a, const Position& b) { return a.time < b.time; });
   }
   bool uses(const Position& p) const { return any_active_ ? p.active : p.system == lowest_; }
-  std::size_t size() const { return fixes_.size(); }
-  // Latitude and longitude at `time`, or nothing outside the fixes' span.
-  std::optional<std::pair<double, double>> at(double time) const {
-    if (fixes_.empty() || time < fixes_.front().time || time > fixes_.back().time) return std::nullopt;
-    auto after = std::lower_bound(fixes_.begin(), fixes_.end(), time, [](const Position& p, double t) { return p.time < t; });
-    if (after->time == time || after == fixes_.begin()) return std::pair{after->latitude_deg, after->longitude_deg};
-    const Position& a = *(after - 1);
-    const Position& b = *after;
-    const double w = (time - a.time) / (b.time - a.time);
-    double dlon = b.longitude_deg - a.longitude_deg;  // across the antimeridian the short way
-    if (dlon > 180) dlon -= 360;
-    if (dlon < -180) dlon += 360;
-    double lon = a.longitude_deg + w * dlon;
-    if (lon > 180) lon -= 360;
-    if (lon < -180) lon += 360;
-    return std::pair{a.latitude_deg + w * (b.latitude_deg - a.latitude_deg), lon};
-  }
 
  private:
   bool any_active_ = false;
   int lowest_ = 4;
-  std::vector<Position> fixes_;
 };
 
-// Roll and pitch at a time: interpolated, the nearest sample outside their span, 0 without any.
-class Motion {
- public:
-  void add(const Attitude& a) {
-    for (std::size_t i = 0; i < a.time.size(); ++i) samples_.push_back({a.time[i], a.roll_deg[i], a.pitch_deg[i]});
+GeodeticTrack track_of(const std::vector<Position>& all, const ActiveSystem& active) {
+  std::vector<GeodeticFix> fixes;
+  for (const Position& p : all) {
+    if (active.uses(p)) fixes.push_back({p.time, p.latitude_deg, p.longitude_deg});
   }
-  void sort() {
-    std::stable_sort(samples_.begin(), samples_.end(), [](const Sample& a, const Sample& b) { return a.time < b.time; });
-  }
-  std::pair<double, double> at(double time) const {
-    if (samples_.empty()) return {0.0, 0.0};
-    auto after = std::lower_bound(samples_.begin(), samples_.end(), time, [](const Sample& s, double t) { return s.time < t; });
-    if (after == samples_.begin()) return {after->roll_deg, after->pitch_deg};
-    if (after == samples_.end()) return {samples_.back().roll_deg, samples_.back().pitch_deg};
-    const Sample& a = *(after - 1);
-    const Sample& b = *after;
-    const double w = b.time > a.time ? (time - a.time) / (b.time - a.time) : 0.0;
-    return {a.roll_deg + w * (b.roll_deg - a.roll_deg), a.pitch_deg + w * (b.pitch_deg - a.pitch_deg)};
-  }
-
- private:
-  struct Sample {
-    double time, roll_deg, pitch_deg;
-  };
-  std::vector<Sample> samples_;
-};
+  return GeodeticTrack(std::move(fixes));
+}
 
 // The swath's valid soundings in the vehicle frame of `nav` (its time's sample), appended to
 // `beams`: level-frame beams turned back by the sample's roll and pitch, their depth taken from
@@ -262,7 +221,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   SurveyRead out;
   std::vector<Position> positions;
   std::vector<std::size_t> position_file;
-  Motion motion;
+  AttitudeTrack motion;
   std::string installation;
   nlohmann::json profiles = nlohmann::json::array();
   std::vector<Swath> swaths;
@@ -279,7 +238,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
         positions.push_back(*fix);
         position_file.push_back(f);
       } else if (const auto* a = std::get_if<Attitude>(&*datagram)) {
-        motion.add(*a);
+        for (std::size_t i = 0; i < a->time.size(); ++i) motion.add({a->time[i], a->roll_deg[i], a->pitch_deg[i]});
       } else if (const auto* i = std::get_if<Installation>(&*datagram); i && installation.empty()) {
         installation = i->text.substr(0, kMaxKeptInstallationText);
       } else if (const auto* svp = std::get_if<SoundSpeedProfile>(&*datagram); svp && profiles.size() < kMaxKeptProfiles) {
@@ -294,34 +253,25 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   }
   order.flush(swaths);
   motion.sort();
-  const Fixes fixes(positions);
-  for (std::size_t k = 0; k < positions.size(); ++k) out.files[position_file[k]].positions_used += fixes.uses(positions[k]);
+  const ActiveSystem active(positions);
+  const GeodeticTrack fixes = track_of(positions, active);
+  for (std::size_t k = 0; k < positions.size(); ++k) out.files[position_file[k]].positions_used += active.uses(positions[k]);
 
   Survey& survey = out.survey;
   survey.metadata.name = files.front().stem().string();
-  std::string crs = options.crs;
-  std::unique_ptr<GeographicProjection> projection;
+  FixProjection projection(options.crs);
   for (Swath& s : swaths) {
     const auto fix = fixes.at(s.time);
     if (!fix) {
       ++out.files[s.file].swaths_outside_navigation;
       continue;
     }
-    if (!projection) {
-      if (crs.empty()) crs = utm_crs_of(fix->second, fix->first);
-      if (const auto problem = crs_problem(crs)) throw std::runtime_error(*problem);
-      projection = std::make_unique<GeographicProjection>(crs);
-      survey.metadata.crs = crs;
-    }
     // Two heads of one ping share one navigation sample (the first head's transducer depth).
     if (survey.nav.empty() || s.time > survey.nav.back().time) {
-      const auto en = projection->forward(fix->second, fix->first);
-      if (!std::isfinite(en.easting) || !std::isfinite(en.northing)) {
-        throw std::runtime_error(files[s.file].string() + ": cannot project the position at " +
-                                 utc(s.time) + " into " + crs);
-      }
-      const auto [roll, pitch] = motion.at(s.time);
-      survey.nav.push_back({s.time, en.easting, en.northing, s.transducer_depth_m, roll, pitch, s.heading_deg});
+      const auto [easting, northing] = projection.forward(fix->first, fix->second, files[s.file].string() + " at " + utc(s.time));
+      const AttitudeSample motion_now = motion.at(s.time);
+      survey.nav.push_back({s.time, easting, northing, s.transducer_depth_m, motion_now.roll_deg, motion_now.pitch_deg,
+                            s.heading_deg});
     }
     Ping ping{s.time, static_cast<std::uint32_t>(survey.beams.size()), s.soundings};
     if (options.keep_soundings) {
@@ -335,6 +285,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
     throw std::runtime_error(files.front().string() + ": no swath with soundings within the position fixes (" +
                              std::to_string(fixes.size()) + " fixes of the active positioning system)");
   }
+  survey.metadata.crs = projection.crs();
   nlohmann::json summaries = nlohmann::json::array();
   for (const FileSummary& f : out.files) summaries.push_back(to_json(f));
   survey.metadata.sonar = {{"format", "Kongsberg EM .all"},
@@ -398,9 +349,7 @@ std::optional<double> first_swath_time(const std::filesystem::path& path) {
 }
 
 bool is_all_path(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".all";
+  return has_extension(path, ".all");
 }
 
 }  // namespace bathyslam::kongsberg

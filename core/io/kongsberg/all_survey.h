@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/bundle.h"
+#include "core/io/sonar_read.h"
 #include "core/types/survey.h"
 
 namespace bathyslam::kongsberg {
@@ -42,16 +43,8 @@ struct FileSummary {
 nlohmann::json to_json(const FileSummary& summary);
 std::string to_text(const FileSummary& summary);
 
-struct ReadOptions {
-  std::string crs;  // "EPSG:<code>"; empty: the WGS 84 UTM zone of the first fix used
-  std::optional<std::filesystem::path> reference_nav;  // a nav.csv-format file
-  bool keep_soundings = true;  // false: each ping keeps its sounding count only (gsf::ReadOptions)
-};
-
-struct SurveyRead {
-  Survey survey;
-  std::vector<FileSummary> files;
-};
+using ReadOptions = SonarReadOptions;
+using SurveyRead = SonarRead<FileSummary>;
 
 // Reads `files` (in time order) into one survey; throws AllError for a damaged file,
 // std::runtime_error for swaths out of time order, no usable swath or an unusable CRS.
