@@ -43,7 +43,6 @@ DrNoiseModel::DrNoiseModel(const std::vector<Eigen::Isometry3d>& dead_reckoning,
   for (const Eigen::Isometry3d& pose : dead_reckoning) level_.push_back(level_frame(pose));
   origin_ = n > 0 ? Eigen::Vector3d(level_[0].translation()) : Eigen::Vector3d::Zero();
   const Eigen::Matrix3d sigma_t = config.dr_sigma_translation_m.cwiseAbs2().asDiagonal();
-  const Eigen::Matrix3d sigma_r = config.dr_sigma_rotation_rad.cwiseAbs2().asDiagonal();
   const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
   sum_qt_.assign(std::max(n, 1), zero);
   sum_qr_.assign(std::max(n, 1), zero);
@@ -52,6 +51,7 @@ DrNoiseModel::DrNoiseModel(const std::vector<Eigen::Isometry3d>& dead_reckoning,
   for (int m = 0; m + 1 < n; ++m) {
     const Eigen::Matrix3d& heading = level_[m].linear();
     const Eigen::Matrix3d qt = heading * sigma_t * heading.transpose();
+    const Eigen::Matrix3d sigma_r = config.rotation_sigma_of_step(m).cwiseAbs2().asDiagonal();
     const Eigen::Matrix3d qr = heading * sigma_r * heading.transpose();
     const Eigen::Matrix3d s = skew(level_[m + 1].translation() - origin_);
     sum_qt_[m + 1] = sum_qt_[m] + qt;

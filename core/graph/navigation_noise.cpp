@@ -15,10 +15,15 @@ double huber(double m2, double threshold) {
   return m2 <= threshold ? m2 : 2.0 * std::sqrt(threshold * m2) - threshold;
 }
 
-// One innovation with its covariance split by source: S = s_t²·A + s_ψ²·B + R.
+// One innovation with its covariance split by source: S = s_t²·A + s_ψ²·B + R, R the
+// registration's own and that of the heading steps modelled so far.
 struct Term {
   Eigen::Vector3d d;
   Eigen::Matrix3d a, b, r;
+  int first_step = 0, end_step = 0;  // the odometry steps it spans: [first_step, end_step)
+  double turn_sign = 1;              // +1 when it runs forward along the chain
+  Eigen::Vector3d to_position;       // DR's, map axes
+  Eigen::Matrix3d from_level;        // DR's heading at `from`: level frame to map axes
 };
 
 Eigen::Matrix3d covariance(const Term& t, double log_t, double log_yaw) {
@@ -64,6 +69,86 @@ Scales minimise(const std::vector<Term>& terms, const std::vector<char>& kept, d
   return best;
 }
 
+// The scales that maximise the likelihood (Huber's loss first, then the Gaussian likelihood of the
+// innovations explained, trimmed again under each new fit until the set holds), and which
+// innovations they explain.
+struct Fit {
+  Scales scales;
+  std::vector<char> explained;
+  int count = 0;
+};
+
+std::vector<char> explained_under(const std::vector<Term>& terms, Scales scales, double chi2) {
+  std::vector<char> explained(terms.size());
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    const Eigen::Matrix3d s = covariance(terms[k], scales.log_t, scales.log_yaw);
+    explained[k] = terms[k].d.dot(s.ldlt().solve(terms[k].d)) <= chi2;
+  }
+  return explained;
+}
+
+Fit fit(const std::vector<Term>& terms, const NavigationNoiseConfig& config, double lowest) {
+  std::vector<char> kept(terms.size(), 1);
+  Scales scales = minimise(terms, kept, config.outlier_chi2, lowest);
+  for (int pass = 0; pass < 5; ++pass) {
+    const std::vector<char> explained = explained_under(terms, scales, config.outlier_chi2);
+    if (pass > 0 && explained == kept) break;
+    if (std::count(explained.begin(), explained.end(), 1) < config.min_registrations) break;
+    kept = explained;
+    scales = minimise(terms, kept, std::numeric_limits<double>::infinity(), lowest);
+  }
+  Fit f{scales, explained_under(terms, scales, config.outlier_chi2), 0};
+  f.count = static_cast<int>(std::count(f.explained.begin(), f.explained.end(), 1));
+  return f;
+}
+
+struct Jump {
+  int step = -1;    // the odometry step from node `step` to the next
+  double turn = 0;  // −(DR's heading jump there), as the innovations see it
+};
+
+// The odometry step whose heading jump best explains the innovations across it: a jump ε at step
+// m (about node m + 1) changes a registration's innovation by −ε·g, g = ±(ẑ × (p_to − p_{m+1}) in
+// `from`'s level frame, 1), + running forward along the chain. Over the innovations spanning m,
+// the least-squares ε under each one's covariance S (Σ gᵀS⁻¹d / Σ gᵀS⁻¹g) and its share of their
+// weighted sum of squares ((Σ gᵀS⁻¹d)² / Σ gᵀS⁻¹g): the registrations that agree with dead
+// reckoning pull it towards no jump wherever they span, and the lever arms place it. Only steps
+// that an innovation `unexplained` names spans are tried.
+Jump best_jump(const std::vector<Term>& terms, const std::vector<char>& unexplained, Scales scales,
+               const std::vector<Eigen::Isometry3d>& dead_reckoning) {
+  const int steps = static_cast<int>(dead_reckoning.size()) - 1;
+  std::vector<char> tried(std::max(steps, 0), 0);
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    if (!unexplained[k]) continue;
+    for (int m = terms[k].first_step; m < terms[k].end_step && m < steps; ++m) tried[m] = 1;
+  }
+  std::vector<Eigen::Matrix3d> information(terms.size());
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    information[k] = covariance(terms[k], scales.log_t, scales.log_yaw).inverse();
+  }
+  Jump best;
+  double best_gain = 0;
+  for (int m = 0; m < steps; ++m) {
+    if (!tried[m]) continue;
+    const Eigen::Vector3d pivot = dead_reckoning[m + 1].translation();
+    double sum_a = 0, sum_b = 0;
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      const Term& t = terms[k];
+      if (m < t.first_step || m >= t.end_step) continue;
+      const Eigen::Vector3d lever = t.to_position - pivot;
+      const Eigen::Vector3d sideways = t.from_level.transpose() * Eigen::Vector3d(-lever.y(), lever.x(), 0.0);
+      const Eigen::Vector3d g = t.turn_sign * Eigen::Vector3d(sideways.x(), sideways.y(), 1.0);
+      const Eigen::Vector3d ig = information[k] * g;
+      sum_a += ig.dot(t.d);
+      sum_b += ig.dot(g);
+    }
+    if (sum_b <= 0) continue;
+    const double gain = sum_a * sum_a / sum_b;
+    if (gain > best_gain) best_gain = gain, best = {m, sum_a / sum_b};
+  }
+  return best;
+}
+
 }  // namespace
 
 DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
@@ -95,6 +180,11 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
     t.a = xy_yaw_block(per_translation.covariance(i.from, i.to));
     t.b = xy_yaw_block(per_yaw.covariance(i.from, i.to));
     t.r = xy_yaw_block(i.measurement);
+    t.first_step = std::min(i.from, i.to);
+    t.end_step = std::max(i.from, i.to);
+    t.turn_sign = i.from < i.to ? 1.0 : -1.0;
+    t.to_position = dead_reckoning[i.to].translation();
+    t.from_level = level_frame(dead_reckoning[i.from]).linear();
     terms.push_back(t);
   }
 
@@ -103,20 +193,42 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
   // found could be explained (χ²₃ 99.9 %), trimmed again under each new estimate until the set
   // holds: a few wrong registrations would otherwise still widen it several times over.
   const double lowest = std::log10(config.min_scale);
-  std::vector<char> kept(terms.size(), 1);
-  Scales scales = minimise(terms, kept, config.outlier_chi2, lowest);
-  for (int pass = 0; pass < 5; ++pass) {
-    std::vector<char> explained(terms.size());
+  Fit best = fit(terms, config, lowest);
+
+  // Heading steps, one at a time while each explains enough of what the noise leaves out.
+  const auto unexplained_count = [](const Fit& f) { return static_cast<int>(f.explained.size()) - f.count; };
+  for (int found = 0; found < config.max_heading_steps && dead_reckoning.size() > 1; ++found) {
+    std::vector<char> unexplained(best.explained.size());
+    for (std::size_t k = 0; k < unexplained.size(); ++k) unexplained[k] = !best.explained[k];
+    const Jump jump = best_jump(terms, unexplained, best.scales, dead_reckoning);
+    if (jump.step < 0) break;
+    GraphConfig one_step = prior;
+    one_step.dr_sigma_translation_m.setZero();
+    one_step.dr_sigma_rotation_rad.setZero();
+    one_step.step_yaw_sigma_rad[jump.step] = std::abs(jump.turn);
+    const DrNoiseModel stepped(dead_reckoning, one_step);
+    std::vector<Term> with_step = terms;
+    const Eigen::Vector3d pivot = dead_reckoning[jump.step + 1].translation();
     for (std::size_t k = 0; k < terms.size(); ++k) {
-      const Eigen::Matrix3d s = covariance(terms[k], scales.log_t, scales.log_yaw);
-      explained[k] = terms[k].d.dot(s.ldlt().solve(terms[k].d)) <= config.outlier_chi2;
+      Term& t = with_step[k];
+      t.r += xy_yaw_block(stepped.covariance(innovations[k].from, innovations[k].to));
+      if (jump.step < t.first_step || jump.step >= t.end_step) continue;
+      // A turn of ε moves a point at distance l by l·ε sideways and l·ε²/2 back towards the pivot:
+      // at degrees over hundreds of metres the second term is metres, which the first-order
+      // variance above does not hold.
+      const Eigen::Vector3d lever = t.from_level.transpose() * (t.to_position - pivot);
+      const Eigen::Vector2d radial = lever.head<2>() * (jump.turn * jump.turn / 2);
+      t.r.topLeftCorner<2, 2>() += radial * radial.transpose();
     }
-    if (pass > 0 && explained == kept) break;
-    if (std::count(explained.begin(), explained.end(), 1) < config.min_registrations) break;
-    kept = explained;
-    scales = minimise(terms, kept, std::numeric_limits<double>::infinity(), lowest);
+    const Fit next = fit(with_step, config, lowest);
+    const int explained = unexplained_count(best) - unexplained_count(next);
+    if (explained < config.min_registrations) break;
+    out.graph.step_yaw_sigma_rad[jump.step] = std::abs(jump.turn);
+    out.heading_steps.push_back({jump.step, -jump.turn, explained});
+    terms = std::move(with_step);
+    best = next;
   }
-  const double best_t = scales.log_t, best_yaw = scales.log_yaw;
+  const double best_t = best.scales.log_t, best_yaw = best.scales.log_yaw;
 
   out.estimated = true;
   out.translation_scale = std::pow(10.0, best_t);

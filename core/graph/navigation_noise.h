@@ -12,6 +12,15 @@
 // that a few wrong registrations do not pass for a noisy navigation. Innovations that share DR steps are taken as independent (a
 // composite likelihood: consistent, its confidence overstated, which only the estimate's
 // report would show). The scales are bounded to [min_scale, 1]: never looser than Table 1.
+//
+// A compass step (a heading fault: one large error among small ones) is no white noise: the
+// registrations across it disagree with dead reckoning by about the same turn, and a sigma small
+// enough for the rest trims them all as outliers, after which the DR gate refuses every right
+// answer across the step and the stiff odometry cannot bend there. So the heading jump that best
+// explains the innovations across it (their positions through the lever arms and their yaw) is
+// tried as that step's own yaw variance (its size squared); it is kept when at least
+// min_registrations more innovations are explained, and the search goes on, up to
+// max_heading_steps.
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -33,6 +42,8 @@ struct NavigationNoiseConfig {
   // beyond it an innovation the noise does not explain (χ²₃ at 99.9 %). Huber alone still let
   // four 25 m outliers among 79 widen the translation sigma elevenfold (navigation_noise_test.cpp).
   double outlier_chi2 = 16.27;
+  // Heading steps looked for; 0: one white sigma for every step, as before.
+  int max_heading_steps = 3;
 
   template <typename Field>
   void fields(Field&& field) {
@@ -40,6 +51,7 @@ struct NavigationNoiseConfig {
     field("min_registrations", min_registrations, 1, 1000000);
     field("min_scale", min_scale, 1e-6, 1);
     field("outlier_chi2", outlier_chi2, 0.1, 1e6);
+    field("max_heading_steps", max_heading_steps, 0, 100);
   }
 };
 
@@ -62,7 +74,13 @@ struct NavigationNoiseEstimate {
   int innovations = 0;
   double translation_scale = 1;  // of the prior's x and y sigmas
   double yaw_scale = 1;          // of the prior's yaw sigma
-  GraphConfig graph;             // the prior with its x, y and yaw sigmas scaled
+  GraphConfig graph;             // the prior with its x, y and yaw sigmas scaled, and the heading steps
+  struct HeadingStep {
+    int step = 0;         // of the odometry step from node `step` to the next
+    double jump_rad = 0;  // DR's heading jump there, as the registrations across it show it
+    int explained = 0;    // innovations explained once it is modelled, not before
+  };
+  std::vector<HeadingStep> heading_steps;
 };
 
 // The maximum-likelihood scales over grids in log space (0.2 decades over the whole range, then

@@ -42,6 +42,10 @@ Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
   return sigma.cwiseAbs2().cwiseInverse().asDiagonal();
 }
 
+Information6 odometry_information(const GraphConfig& config, int k) {
+  return information_from_sigmas(config.dr_sigma_translation_m, config.rotation_sigma_of_step(k));
+}
+
 std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                           const Information6& information) {
   std::vector<PoseGraphEdge> edges;

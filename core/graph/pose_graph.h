@@ -1,5 +1,6 @@
 #pragma once
 // graph: the pose graph over submap poses, solved with Ceres (as Ceres' pose_graph_3d example).
+#include <map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -65,6 +66,16 @@ struct GraphConfig {
   // Table 1 (c): DR noise, translation (5, 5, 1) m and rotation (1e-4, 1e-4, 1e-2) rad.
   Eigen::Vector3d dr_sigma_translation_m{5.0, 5.0, 1.0};
   Eigen::Vector3d dr_sigma_rotation_rad{1e-4, 1e-4, 1e-2};
+  // Odometry steps (node k to k + 1, by k) whose heading jumped, each with its own yaw sigma: a
+  // compass step is one large error among small ones, which no single sigma describes
+  // (navigation_noise.h finds them). Not a --set field.
+  std::map<int, double> step_yaw_sigma_rad;
+  // The DR sigmas of rotation of the step from node k.
+  Eigen::Vector3d rotation_sigma_of_step(int k) const {
+    const auto jump = step_yaw_sigma_rad.find(k);
+    return jump == step_yaw_sigma_rad.end() ? dr_sigma_rotation_rad
+                                            : Eigen::Vector3d(dr_sigma_rotation_rad.x(), dr_sigma_rotation_rad.y(), jump->second);
+  }
   RobustKernel robust_kernel = RobustKernel::huber;
   double huber_delta = 1.0;  // on whitened residuals
   // DCS's Φ, on the squared whitened residual: below it an edge keeps its full weight. χ²₆ at
@@ -82,6 +93,9 @@ struct GraphConfig {
     field("max_iterations", max_iterations, 1, 10000);
   }
 };
+
+// The information of the odometry step from node `k` under `config`'s DR sigmas.
+Information6 odometry_information(const GraphConfig& config, int k);
 
 struct GraphSolution {
   std::vector<Eigen::Isometry3d> poses;

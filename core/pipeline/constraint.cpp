@@ -91,14 +91,13 @@ Information6 without_direction(const Information6& information, const Eigen::Vec
 }
 
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph) {
-  const Information6 dr_information = information_from_sigmas(graph.dr_sigma_translation_m, graph.dr_sigma_rotation_rad);
   std::vector<Constraint> constraints;
-  for (const PoseGraphEdge& e : odometry_edges(dead_reckoning, dr_information)) {
+  for (const PoseGraphEdge& e : odometry_edges(dead_reckoning, Information6::Identity())) {
     Constraint c;
     c.from = e.from;
     c.to = e.to;
     c.measured = e.measured;
-    c.information = e.information;
+    c.information = odometry_information(graph, e.from);
     constraints.push_back(c);
   }
   return constraints;

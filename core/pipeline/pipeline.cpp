@@ -134,10 +134,9 @@ class NavigationNoiseTracker {
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(r.dr_poses, graph);
     pair_distances = PairDistances{};  // PCM's tests rest on the model
-    const Information6 odometry = information_from_sigmas(graph.dr_sigma_translation_m, graph.dr_sigma_rotation_rad);
     for (Constraint& c : r.constraints) {
       if (c.type == ConstraintType::kOdometry) {
-        c.information = odometry;
+        c.information = odometry_information(graph, c.from);
       } else {
         judge_with_prior(c, dr, r.dr_poses, config_, plan);
       }

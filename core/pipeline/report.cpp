@@ -222,6 +222,16 @@ std::size_t soundings_of(const SubmapSet& set) {
   return n;
 }
 
+// Each heading step: the submaps it lies between, DR's heading jump there, and how
+// many registrations it explains that the white noise did not.
+nlohmann::json heading_steps_json(const NavigationNoiseEstimate& e) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& h : e.heading_steps) {
+    steps.push_back({{"after_submap", h.step}, {"jump_deg", h.jump_rad * 180 / M_PI}, {"registrations_explained", h.explained}});
+  }
+  return steps;
+}
+
 nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
   return {{"estimated", e.estimated},
           {"innovations", e.innovations},
@@ -230,7 +240,8 @@ nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
           {"dr_sigma_translation_m", {e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_translation_m.y(),
                                       e.graph.dr_sigma_translation_m.z()}},
           {"dr_sigma_rotation_rad", {e.graph.dr_sigma_rotation_rad.x(), e.graph.dr_sigma_rotation_rad.y(),
-                                     e.graph.dr_sigma_rotation_rad.z()}}};
+                                     e.graph.dr_sigma_rotation_rad.z()}},
+          {"heading_steps", heading_steps_json(e)}};
 }
 
 }  // namespace
@@ -308,6 +319,10 @@ std::string report_text(const PipelineResult& r) {
                       "(Table 1 x %.3f, x %.3f)\n",
                       static_cast<double>(e.innovations), e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_rotation_rad.z(),
                       e.translation_scale, e.yaw_scale);
+    for (const auto& h : e.heading_steps) {
+      summary += format("  heading step     %+.1f deg between submaps %d and %d (%d registrations explained by it)\n",
+                        h.jump_rad * 180 / M_PI, h.step, h.step + 1, h.explained);
+    }
   }
   if (r.safety_net.ran) summary += "safety net         " + r.safety_net.verdict + "\n";
   for (const std::string& d : r.safety_net.dropped) summary += "  dropped " + d + "\n";

@@ -27,7 +27,8 @@ struct Lawnmower {
   int node(int line, int along) const { return line * n + (line % 2 == 0 ? along : n - 1 - along); }
 };
 
-Lawnmower lawnmower(int lines, int n, double sigma_yaw, uint64_t seed) {
+// ... with, at node `step_at` (if any), a compass step: the heading off by `step_rad` from there on.
+Lawnmower lawnmower(int lines, int n, double sigma_yaw, uint64_t seed, int step_at = -1, double step_rad = 0) {
   Lawnmower s;
   s.n = n;
   for (int l = 0; l < lines; ++l) {
@@ -40,8 +41,8 @@ Lawnmower lawnmower(int lines, int n, double sigma_yaw, uint64_t seed) {
   std::normal_distribution<double> yaw_noise(0.0, sigma_yaw);
   s.dr = {s.truth[0]};
   for (std::size_t i = 1; i < s.truth.size(); ++i) {
-    s.dr.push_back(s.dr.back() * (s.truth[i - 1].inverse() * s.truth[i]) * pose(0, 0, yaw_noise(rng)) *
-                   Eigen::Translation3d(0, 0, 10.0));
+    const double turn = yaw_noise(rng) + (static_cast<int>(i) == step_at ? step_rad : 0.0);
+    s.dr.push_back(s.dr.back() * (s.truth[i - 1].inverse() * s.truth[i]) * pose(0, 0, turn) * Eigen::Translation3d(0, 0, 10.0));
   }
   return s;
 }
@@ -130,6 +131,39 @@ TEST(NavigationNoise, TheDrGateUnderTheSurveysNoiseRefusesWhatTableOneLetsBy) {
   const DrNoiseModel dr(s.dr, e.graph);
   EXPECT_LE(mahalanobis2_xy_yaw(right.difference, dr.covariance(right.from, right.to) + right.measurement),
             PlausibilityConfig{}.chi2_threshold);
+}
+
+// A compass step of 5 degrees in a navigation otherwise good to 1e-4 rad a step: one white sigma
+// small enough for the rest trims every registration across the step, and the DR gate under it
+// refuses the right answer there. Modelled as a step of its own, the estimate finds where and how
+// large it is, keeps the small sigma, and the gate lets the right answer through.
+TEST(NavigationNoise, ACompassStepIsFoundWhereTheRegistrationsAcrossItAgree) {
+  const double step = 5.0 * M_PI / 180;
+  const Lawnmower s = lawnmower(6, 30, 1e-4, 4, 80, step);  // node 80: line 2, 20 submaps along
+  const std::vector<DrInnovation> innovations = between_lines(s, 6);
+  const NavigationNoiseEstimate e = estimate_navigation_noise(s.dr, innovations, GraphConfig{}, {});
+  ASSERT_EQ(e.heading_steps.size(), 1u);
+  EXPECT_NEAR(e.heading_steps[0].step, 79, 1) << "the odometry step into node 80";
+  EXPECT_NEAR(std::abs(e.heading_steps[0].jump_rad), step, 0.1 * step);
+  EXPECT_GE(e.heading_steps[0].explained, 3);
+  EXPECT_LT(e.graph.dr_sigma_rotation_rad.z(), 1e-3) << "the rest of the navigation stays stiff";
+
+  NavigationNoiseConfig white;
+  white.max_heading_steps = 0;
+  const NavigationNoiseEstimate without = estimate_navigation_noise(s.dr, innovations, GraphConfig{}, white);
+  const DrInnovation right = innovation(s, s.node(2, 25), s.node(3, 25));  // from after the step to the next line
+  const DrInnovation across = innovation(s, s.node(1, 25), s.node(2, 25));  // from before it to after
+  auto passes = [&](const GraphConfig& graph, const DrInnovation& i) {
+    const DrNoiseModel dr(s.dr, graph);
+    return mahalanobis2_xy_yaw(i.difference, dr.covariance(i.from, i.to) + i.measurement) <= PlausibilityConfig{}.chi2_threshold;
+  };
+  EXPECT_TRUE(passes(e.graph, across));
+  EXPECT_FALSE(passes(without.graph, across)) << "the test needs a step the white sigma cannot take";
+  EXPECT_TRUE(passes(e.graph, right));
+
+  // Without a step, none is found.
+  const Lawnmower clean = lawnmower(6, 30, 1e-4, 4);
+  EXPECT_TRUE(estimate_navigation_noise(clean.dr, between_lines(clean, 6), GraphConfig{}, {}).heading_steps.empty());
 }
 
 }  // namespace

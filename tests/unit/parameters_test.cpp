@@ -107,6 +107,7 @@ TEST(Parameters, EveryFieldOfTheConfigurationIsAParameter) {
     for (std::size_t i = offset; i < offset + size; ++i) covered[i] = true;
   };
   cover(&a->configuration, sizeof a->configuration);  // the preset's name, not a parameter
+  cover(&a->graph.step_yaw_sigma_rad, sizeof a->graph.step_yaw_sigma_rad);  // found in the survey, not set
   std::vector<std::string> names;
   a->fields([&](std::string_view name, auto& field, double min, double max) {
     names.emplace_back(name);
