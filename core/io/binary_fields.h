@@ -21,7 +21,9 @@ class FieldCursor {
  public:
   // Reads `bytes` from `at` on; fields must end by `end` (exclusive).
   FieldCursor(std::string_view bytes, std::size_t at, std::size_t end, ByteOrder order)
-      : bytes_(bytes), at_(at), end_(end < bytes.size() ? end : bytes.size()), order_(order) {}
+      : bytes_(bytes), end_(end < bytes.size() ? end : bytes.size()), order_(order) {
+    at_ = at < end_ ? at : end_;  // a start past the end reads nothing
+  }
 
   std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(take(1, field)[0]); }
   std::uint16_t u16(const char* field) { return static_cast<std::uint16_t>(unsigned_of(2, field)); }

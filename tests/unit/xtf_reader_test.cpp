@@ -24,7 +24,7 @@ const std::filesystem::path kFile = std::filesystem::path(BATHYSLAM_XTF_DATA) / 
 // Where the file's first packets are (its layout, read with a hex viewer): a position packet at
 // 1024, an attitude packet at 1088, the first bathymetry packet at 1152 with its BTH0 packet at
 // 1408 and its sections H0 at 1420, R0 at 1536, A2 at 2056, I1 at 2604, G0 at 3124, Q0 at 3140.
-constexpr std::size_t kFirstPing = 1152, kH0 = 1420, kQ0 = 3140;
+constexpr std::size_t kFirstPing = 1152, kH0 = 1420, kR0 = 1536, kQ0 = 3140;
 
 std::string bytes_of(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -139,6 +139,13 @@ TEST(XtfReader, DamageIsAnErrorNamingFileOffsetAndField) {
   b = good;
   b[1024 + 14 + 2] = 13;  // the first fix in month 13 (after the packet header and the year)
   EXPECT_THAT(error_of(b), testing::HasSubstr("x.xtf:1024: position packet date: 2015-13-8 is not a date"));
+  b = good;
+  const double off_the_earth = 95.0;
+  std::memcpy(&b[1024 + 14 + 9], &off_the_earth, 8);  // the first fix's latitude
+  EXPECT_THAT(error_of(b), testing::HasSubstr("x.xtf:1024: position packet RawYcoordinate: 95.000000 is out of range"));
+  b = good;
+  put_be16(b, kR0 + 4, 0x7e00);  // a range scale of about 4e37 s a count
+  EXPECT_THAT(error_of(b), testing::HasSubstr("x.xtf:1152: R2Sonic bathymetry packet R0 scaling factor:"));
 }
 
 TEST(XtfReader, UnknownPacketsAreSkippedAndBeamsWithoutDetectionRejected) {
@@ -235,7 +242,9 @@ TEST(XtfSurvey, WithoutNavigationPacketsThePingHeadersNavigate) {
   const SurveyRead from_packets = read_survey({kFile});
   std::filesystem::remove(stripped);
   EXPECT_TRUE(from_headers.files[0].navigation_from_ping_headers);
-  EXPECT_EQ(from_headers.files[0].positions, 923u);
+  // One fix per ping header that carries a newer one than the last (NavFixMilliseconds).
+  EXPECT_GT(from_headers.files[0].positions, 700u);
+  EXPECT_LE(from_headers.files[0].positions, 923u);
   const auto& a = from_packets.survey.nav;
   const auto& h = from_headers.survey.nav;
   ASSERT_GT(h.size(), 900u);

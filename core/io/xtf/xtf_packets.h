@@ -70,9 +70,10 @@ struct BathyBeam {
 // used when a file has no position or attitude packets of its own.
 struct PingHeaderNavigation {
   double latitude_deg = 0, longitude_deg = 0;  // SensorY/Xcoordinate
+  std::uint32_t fix_ms = 0;  // NavFixMilliseconds: the fix's time of day (ms since midnight), 0: not given
   double roll_deg = 0, pitch_deg = 0, heave_m = 0, heading_deg = 0;
   bool position_usable() const;  // finite and on the Earth
-  bool attitude_usable() const;  // finite and within a turn
+  bool attitude_usable() const;  // finite, within a turn, and not all zero (a logger leaving it empty)
 };
 
 // An R2Sonic ping (packet 65).
@@ -107,13 +108,14 @@ class Reader {
   // The next packet, or nothing at the end of the file. Throws XtfError.
   std::optional<Packet> next();
   std::uint64_t bytes_read() const { return offset_; }
+  std::uint64_t packet_offset() const { return packet_offset_; }  // of the last packet's header
   std::uint64_t packets_read() const { return packets_; }
 
  private:
   ByteSource& source_;
   std::string file_;
   FileHeader header_;
-  std::uint64_t offset_ = 0;
+  std::uint64_t offset_ = 0, packet_offset_ = 0;
   std::uint64_t packets_ = 0;
   std::string bytes_;
 };

@@ -52,17 +52,19 @@ Mounting mounting(FieldCursor& c) {
   return m;
 }
 
-Position position(FieldCursor& c) {
+// `geographic`: the file's navigation is latitude and longitude (NavUnits 3), not metres.
+Position position(FieldCursor& c, bool geographic) {
   Position p;
   p.time = date_time(c, 1e-4, true);  // the fraction in tenths of a millisecond
-  p.latitude_deg = finite(c.f64("RawYcoordinate"), "RawYcoordinate", 1e8);
-  p.longitude_deg = finite(c.f64("RawXcoordinate"), "RawXcoordinate", 1e8);
+  p.latitude_deg = finite(c.f64("RawYcoordinate"), "RawYcoordinate", geographic ? 90 : 1e8);
+  p.longitude_deg = finite(c.f64("RawXcoordinate"), "RawXcoordinate", geographic ? 180 : 1e8);
   return p;
 }
 
 Attitude attitude(FieldCursor& c) {
   c.skip(8, "reserved");
   const std::uint32_t epoch_us = c.u32("EpochMicroseconds"), epoch_s = c.u32("SourceEpoch");
+  if (epoch_us >= 1'000'000u) throw BadField{"EpochMicroseconds", std::to_string(epoch_us) + " is a second or more"};
   Attitude a;
   a.pitch_deg = finite(c.f32("pitch"), "pitch", 180);
   a.roll_deg = finite(c.f32("roll"), "roll", 180);
@@ -90,7 +92,9 @@ PingHeaderNavigation ping_header_navigation(FieldCursor& c) {
   n.roll_deg = c.f32("SensorRoll");
   n.heading_deg = c.f32("SensorHeading");
   n.heave_m = c.f32("Heave");
-  c.skip(kPingHeaderBytes - 206, "rest of the ping header");
+  c.skip(12, "Yaw, AttitudeTimeTag, DOT");
+  n.fix_ms = c.u32("NavFixMilliseconds");
+  c.skip(kPingHeaderBytes - 222, "rest of the ping header");
   return n;
 }
 
@@ -150,13 +154,17 @@ BathyPing r2sonic_ping(std::string_view bytes, std::size_t at) {
 
   FieldCursor r0 = cursor(*s.r0);
   const float range_scale = r0.f32("R0 scaling factor");
-  if (!(range_scale > 0 && std::isfinite(range_scale))) throw BadField{"R0 scaling factor", std::to_string(range_scale) + " is not a scale"};
+  // The longest two-way time of any multibeam is well under 10 s (7,500 m at 1,500 m/s).
+  if (!(range_scale > 0 && range_scale * 65535 <= 10)) {
+    throw BadField{"R0 scaling factor", std::to_string(range_scale) + " s is not a range scale"};
+  }
   for (BathyBeam& b : p.beams) b.two_way_time_s = r0.u16("R0 range") * range_scale;
 
   if (s.a2) {
     FieldCursor a2 = cursor(*s.a2);
     const float first = a2.f32("A2 first angle"), scale = a2.f32("A2 scaling factor");
-    if (!std::isfinite(first) || !std::isfinite(scale)) throw BadField{"A2 first angle", "is not a number"};
+    if (!std::isfinite(first)) throw BadField{"A2 first angle", "is not a number"};
+    if (!std::isfinite(scale)) throw BadField{"A2 scaling factor", "is not a number"};
     a2.skip(24, "A2 reserved");
     std::uint32_t sum = 0;
     for (BathyBeam& b : p.beams) {
@@ -197,7 +205,8 @@ bool PingHeaderNavigation::position_usable() const {
 
 bool PingHeaderNavigation::attitude_usable() const {
   const auto within = [](double v, double limit) { return std::isfinite(v) && std::abs(v) <= limit; };
-  return within(roll_deg, 90) && within(pitch_deg, 90) && within(heave_m, 100) && within(heading_deg, 720);
+  const bool empty = roll_deg == 0 && pitch_deg == 0 && heave_m == 0 && heading_deg == 0;
+  return !empty && within(roll_deg, 90) && within(pitch_deg, 90) && within(heave_m, 100) && within(heading_deg, 720);
 }
 
 bool BathyBeam::valid() const {
@@ -266,6 +275,7 @@ Reader::Reader(ByteSource& source, std::string file) : source_(source), file_(st
 
 std::optional<Packet> Reader::next() {
   const std::uint64_t at = offset_;
+  packet_offset_ = at;
   char head[kPacketHeaderBytes];
   const std::size_t got = read_fully(source_, head, kPacketHeaderBytes);
   if (got == 0) return std::nullopt;
@@ -302,7 +312,7 @@ std::optional<Packet> Reader::next() {
   try {
     FieldCursor c(bytes_, 0, bytes_.size(), ByteOrder::kLittle);
     switch (type) {
-      case kPosition: return position(c);
+      case kPosition: return position(c, header_.navigation_units == 3);
       case kAttitude: return attitude(c);
       case kR2SonicBathymetry: {
         const PingHeaderNavigation header = ping_header_navigation(c);

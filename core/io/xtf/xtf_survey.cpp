@@ -34,6 +34,10 @@ Geometry geometry_of(const Reader& reader, const std::filesystem::path& path) {
     throw std::runtime_error(path.string() + ": file header NavUnits: " + std::to_string(h.navigation_units) +
                              " (projected coordinates) is not read; bathyslam reads latitude and longitude (3)");
   }
+  if (h.bathymetry_channels > 1) {
+    throw std::runtime_error(path.string() + ": file header NumberOfBathymetryChannels: " + std::to_string(h.bathymetry_channels) +
+                             " (several sonar heads) is not read; bathyslam reads one head's XTF");
+  }
   if (!h.bathymetry) {
     throw std::runtime_error(path.string() + ": file header: no bathymetry channel is described (the sonar's mounting)");
   }
@@ -83,6 +87,16 @@ void add_fix(FileSummary& s, double latitude, double longitude) {
   ++s.positions;
 }
 
+// When the fix a ping header carries was taken: its time of day (NavFixMilliseconds) on the ping's
+// day, the nearer midnight's side; without it, the ping's own time.
+double header_fix_time(const PingRecord& r) {
+  if (r.header.fix_ms == 0 || r.header.fix_ms >= 86'400'000u) return r.time;
+  double t = std::floor(r.time / 86400) * 86400 + r.header.fix_ms / 1000.0;
+  if (t - r.time > 43200) t -= 86400;
+  if (r.time - t > 43200) t += 86400;
+  return t;
+}
+
 class SummaryBuilder {
  public:
   SummaryBuilder(std::string file, const FileHeader& header) {
@@ -128,7 +142,7 @@ std::uint8_t type_of(const Packet& p) {
 }
 
 std::string where(const std::filesystem::path& path, const Reader& reader) {
-  return path.string() + ":" + std::to_string(reader.bytes_read());
+  return path.string() + ":" + std::to_string(reader.packet_offset());
 }
 
 // Pings come in time order within and across files (one sonar head).
@@ -216,7 +230,8 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
         if (options.keep_soundings) record.kept = std::move(*p);
         pings.push_back(std::move(record));
       } else if (const auto* fix = std::get_if<Position>(&*packet)) {
-        fixes.push_back({fix->time, fix->latitude_deg, fix->longitude_deg});
+        // (0, 0): what some loggers write before the receiver has a fix.
+        if (fix->latitude_deg != 0 || fix->longitude_deg != 0) fixes.push_back({fix->time, fix->latitude_deg, fix->longitude_deg});
       } else if (const auto* a = std::get_if<Attitude>(&*packet)) {
         motion.add({a->time, a->roll_deg, a->pitch_deg, a->heave_m, a->heading_deg});
       }
@@ -224,14 +239,23 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
     out.files.push_back(summary.finish(reader.bytes_read(), reader.packets_read()));
   }
   // Without position or attitude packets: what the logger wrote into each ping's header.
-  const bool header_fixes = fixes.empty(), header_motion = motion.size() == 0;
+  // Decided file by file: a file between two that have position packets is not to be navigated by
+  // interpolating across it.
+  std::vector<char> header_fixes(files.size()), header_motion(files.size());
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    header_fixes[f] = out.files[f].positions == 0;
+    header_motion[f] = out.files[f].attitude_samples == 0;
+  }
+  double last_header_fix = -INFINITY;
   for (const PingRecord& r : pings) {
-    if (header_fixes && r.header.position_usable()) {
-      fixes.push_back({r.time, r.header.latitude_deg, r.header.longitude_deg});
+    const double fix_time = header_fix_time(r);
+    if (header_fixes[r.file] && r.header.position_usable() && fix_time > last_header_fix) {
+      fixes.push_back({fix_time, r.header.latitude_deg, r.header.longitude_deg});
       add_fix(out.files[r.file], r.header.latitude_deg, r.header.longitude_deg);
       out.files[r.file].navigation_from_ping_headers = true;
+      last_header_fix = fix_time;
     }
-    if (header_motion && r.header.attitude_usable()) {
+    if (header_motion[r.file] && r.header.attitude_usable()) {
       motion.add({r.time, r.header.roll_deg, r.header.pitch_deg, r.header.heave_m, r.header.heading_deg});
       out.files[r.file].navigation_from_ping_headers = true;
     }
