@@ -149,6 +149,27 @@ Jump best_jump(const std::vector<Term>& terms, const std::vector<char>& unexplai
   return best;
 }
 
+// The variance a heading step of `sigma` at odometry step `step` adds to each innovation: its
+// first-order effect (DrNoiseModel's) and the turn's second-order radial one, l·σ²/2 at a lever
+// arm l, which at degrees over hundreds of metres is metres.
+void add_heading_step(std::vector<Term>& terms, const std::vector<DrInnovation>& innovations,
+                      const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& prior, int step, double sigma) {
+  GraphConfig one_step = prior;
+  one_step.dr_sigma_translation_m.setZero();
+  one_step.dr_sigma_rotation_rad.setZero();
+  one_step.step_yaw_sigma_rad = {{step, sigma}};
+  const DrNoiseModel stepped(dead_reckoning, one_step);
+  const Eigen::Vector3d pivot = dead_reckoning[step + 1].translation();
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    Term& t = terms[k];
+    t.r += xy_yaw_block(stepped.covariance(innovations[k].from, innovations[k].to));
+    if (step < t.first_step || step >= t.end_step) continue;
+    const Eigen::Vector3d lever = t.from_level.transpose() * (t.to_position - pivot);
+    const Eigen::Vector2d radial = lever.head<2>() * (sigma * sigma / 2);
+    t.r.topLeftCorner<2, 2>() += radial * radial.transpose();
+  }
+}
+
 }  // namespace
 
 DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
@@ -159,7 +180,8 @@ DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
 
 NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                                   const std::vector<DrInnovation>& innovations, const GraphConfig& prior,
-                                                  const NavigationNoiseConfig& config) {
+                                                  const NavigationNoiseConfig& config,
+                                                  const std::vector<NavigationNoiseEstimate::HeadingStep>& known_steps) {
   NavigationNoiseEstimate out;
   out.graph = prior;
   out.innovations = static_cast<int>(innovations.size());
@@ -188,6 +210,14 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
     terms.push_back(t);
   }
 
+  // Heading steps found before stay: their variance is in the innovations the white noise is fitted to.
+  for (const NavigationNoiseEstimate::HeadingStep& h : known_steps) {
+    if (h.step < 0 || h.step + 1 >= static_cast<int>(dead_reckoning.size())) continue;
+    add_heading_step(terms, innovations, dead_reckoning, prior, h.step, std::abs(h.jump_rad));
+    out.graph.step_yaw_sigma_rad[h.step] = std::abs(h.jump_rad);
+    out.heading_steps.push_back(h);
+  }
+
   // Huber's loss over all innovations first: convex in the residuals, so wrong registrations can
   // only widen the noise, never explain it away. Then the Gaussian likelihood of those the noise
   // found could be explained (χ²₃ 99.9 %), trimmed again under each new estimate until the set
@@ -197,29 +227,14 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
 
   // Heading steps, one at a time while each explains enough of what the noise leaves out.
   const auto unexplained_count = [](const Fit& f) { return static_cast<int>(f.explained.size()) - f.count; };
-  for (int found = 0; found < config.max_heading_steps && dead_reckoning.size() > 1; ++found) {
+  for (auto found = out.heading_steps.size(); found < static_cast<std::size_t>(config.max_heading_steps) && dead_reckoning.size() > 1;
+       ++found) {
     std::vector<char> unexplained(best.explained.size());
     for (std::size_t k = 0; k < unexplained.size(); ++k) unexplained[k] = !best.explained[k];
     const Jump jump = best_jump(terms, unexplained, best.scales, dead_reckoning);
     if (jump.step < 0) break;
-    GraphConfig one_step = prior;
-    one_step.dr_sigma_translation_m.setZero();
-    one_step.dr_sigma_rotation_rad.setZero();
-    one_step.step_yaw_sigma_rad[jump.step] = std::abs(jump.turn);
-    const DrNoiseModel stepped(dead_reckoning, one_step);
     std::vector<Term> with_step = terms;
-    const Eigen::Vector3d pivot = dead_reckoning[jump.step + 1].translation();
-    for (std::size_t k = 0; k < terms.size(); ++k) {
-      Term& t = with_step[k];
-      t.r += xy_yaw_block(stepped.covariance(innovations[k].from, innovations[k].to));
-      if (jump.step < t.first_step || jump.step >= t.end_step) continue;
-      // A turn of ε moves a point at distance l by l·ε sideways and l·ε²/2 back towards the pivot:
-      // at degrees over hundreds of metres the second term is metres, which the first-order
-      // variance above does not hold.
-      const Eigen::Vector3d lever = t.from_level.transpose() * (t.to_position - pivot);
-      const Eigen::Vector2d radial = lever.head<2>() * (jump.turn * jump.turn / 2);
-      t.r.topLeftCorner<2, 2>() += radial * radial.transpose();
-    }
+    add_heading_step(with_step, innovations, dead_reckoning, prior, jump.step, std::abs(jump.turn));
     const Fit next = fit(with_step, config, lowest);
     const int explained = unexplained_count(best) - unexplained_count(next);
     if (explained < config.min_registrations) break;

@@ -85,8 +85,10 @@ struct NavigationNoiseEstimate {
 
 // The maximum-likelihood scales over grids in log space (0.2 decades over the whole range, then
 // 0.05 and 0.01 about the best), which the likelihood's few local minima do not mislead.
+// `known_steps` (an earlier estimate's) are kept as found, new ones looked for beside them.
 NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                                   const std::vector<DrInnovation>& innovations, const GraphConfig& prior,
-                                                  const NavigationNoiseConfig& config);
+                                                  const NavigationNoiseConfig& config,
+                                                  const std::vector<NavigationNoiseEstimate::HeadingStep>& known_steps = {});
 
 }  // namespace bathyslam

@@ -130,7 +130,7 @@ class NavigationNoiseTracker {
     if (count == estimated_from_) return;
     estimated_from_ = count;
     r.navigation_noise = estimate_navigation_noise(r.dr_poses, dr_innovations(r.constraints, dr, r.dr_poses, plan),
-                                                   config_.graph, config_.navigation_noise);
+                                                   config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(r.dr_poses, graph);
     pair_distances = PairDistances{};  // PCM's tests rest on the model
