@@ -61,6 +61,14 @@ std::pair<double, double> FixProjection::forward(double latitude_deg, double lon
   return {en.easting, en.northing};
 }
 
+double AttitudeTrack::gap_at(double time) const {
+  if (samples_.empty()) return INFINITY;
+  const auto after = first_not_before(samples_, time);
+  if (after == samples_.begin()) return after->time - time;
+  if (after == samples_.end()) return time - samples_.back().time;
+  return after->time - (after - 1)->time;
+}
+
 void AttitudeTrack::sort() {
   std::stable_sort(samples_.begin(), samples_.end(), [](const AttitudeSample& a, const AttitudeSample& b) { return a.time < b.time; });
 }

@@ -41,6 +41,9 @@ class AttitudeTrack {
   void sort();  // after the last add
   std::size_t size() const { return samples_.size(); }
   AttitudeSample at(double time) const;
+  // How far `time` is from the samples that give at(time): the span of the two around it, or the
+  // distance to the nearest outside their span; infinite without any.
+  double gap_at(double time) const;
 
  private:
   std::vector<AttitudeSample> samples_;

@@ -259,6 +259,39 @@ TEST(XtfSurvey, WithoutNavigationPacketsThePingHeadersNavigate) {
   }
 }
 
+// The motion sensor silent for five seconds: the pings then have no roll or heading of their own
+// and are counted out, not georeferenced with the last sample's.
+TEST(XtfSurvey, PingsInAnAttitudeDropoutAreCountedNotKept) {
+  std::string b = bytes_of(kFile);
+  int silenced = 0;
+  for (std::size_t at = 1024; at < b.size();) {
+    std::uint32_t n = 0;
+    for (int i = 3; i >= 0; --i) n = (n << 8) | static_cast<unsigned char>(b[at + 10 + i]);
+    if (b[at + 2] == static_cast<char>(kAttitude)) {
+      const int second = static_cast<unsigned char>(b[at + 14 + 40 + 6]);  // the sample's second of the minute
+      if (second >= 30 && second < 35) b[at + 2] = static_cast<char>(200), ++silenced;
+    }
+    at += n;
+  }
+  ASSERT_GT(silenced, 100);
+  const std::filesystem::path gap = std::filesystem::temp_directory_path() / "xtf_test_attitude_gap.xtf";
+  std::ofstream(gap, std::ios::binary) << b;
+  const SurveyRead read = read_survey({gap});
+  Survey outline = read_survey({gap}, {"", std::nullopt, false}).survey;
+  struct Count : PingSink {
+    std::size_t pings = 0;
+    void begin(const Survey&) override {}
+    void ping(double, std::span<const Beam>) override { ++pings; }
+  } sink;
+  stream_soundings({gap}, outline, sink);
+  std::filesystem::remove(gap);
+  // About 5 s of pings at 19 a second, less the second at either edge still within reach.
+  EXPECT_GT(read.files[0].pings_outside_navigation, 50u);
+  EXPECT_LT(read.files[0].pings_outside_navigation, 100u);
+  EXPECT_EQ(read.survey.pings.size() + read.files[0].pings_outside_navigation, 923u);
+  EXPECT_EQ(sink.pings, read.survey.pings.size()) << "the streamed reading leaves the same pings out";
+}
+
 TEST(XtfSurvey, FilesOfOneFormatOnlyAndInTimeOrder) {
   EXPECT_TRUE(is_sonar_file_path("a/B.XTF"));
   EXPECT_TRUE(is_sonar_file_name("line_0009.xtf"));

@@ -18,6 +18,9 @@ namespace {
 
 constexpr int kLatitudeLongitude = 3;  // NavUnits
 constexpr double kDegToRad = M_PI / 180.0;
+// Motion sensors report at 10 Hz or more: attitude a second or more away is a dropout, and a ping
+// there has no roll or heading to be georeferenced with.
+constexpr double kMaxAttitudeGap_s = 1.0;
 
 std::string utc(double seconds) { return format_utc(seconds, "%Y-%m-%dT%H:%M:%SZ"); }
 
@@ -196,7 +199,7 @@ std::string to_text(const FileSummary& s) {
   return format("%s: XTF from %s, %s, %llu bytes, %llu packets\n", s.file.c_str(), s.recording_program.c_str(),
                 s.sonar.c_str(), static_cast<unsigned long long>(s.bytes), static_cast<unsigned long long>(s.packets)) +
          format("  packets     %s\n", packets.c_str()) +
-         format("  pings       %llu, %llu outside the position fixes\n", static_cast<unsigned long long>(s.pings),
+         format("  pings       %llu, %llu outside the position fixes or the attitude\n", static_cast<unsigned long long>(s.pings),
                 static_cast<unsigned long long>(s.pings_outside_navigation)) +
          format("  soundings   %llu of %llu beams (%llu rejected)\n", static_cast<unsigned long long>(s.soundings),
                 static_cast<unsigned long long>(s.beams), static_cast<unsigned long long>(s.rejected_beams)) +
@@ -268,7 +271,7 @@ SurveyRead read_survey(const std::vector<std::filesystem::path>& files, const Re
   FixProjection projection(options.crs);
   for (PingRecord& r : pings) {
     const auto fix = track.at(r.time);
-    if (!fix) {
+    if (!fix || motion.gap_at(r.time) > kMaxAttitudeGap_s) {
       ++out.files[r.file].pings_outside_navigation;
       continue;
     }
@@ -316,7 +319,8 @@ void stream_soundings(const std::vector<std::filesystem::path>& files, Survey& s
       check_order(p->time, last, at);
       if (nav.empty() || p->time < nav.front().time || p->time > nav.back().time) continue;
       while (sample < nav.size() && nav[sample].time < p->time) ++sample;
-      if (sample == nav.size() || nav[sample].time != p->time) throw changed();
+      // No sample at its time: a ping the first reading left out (an attitude dropout).
+      if (sample == nav.size() || nav[sample].time != p->time) continue;
       beams.clear();
       append_soundings(*p, geometry, beams);
       if (beams.empty()) continue;

@@ -9,7 +9,8 @@
 // mounting angles and moved by its offsets: positions in the vessel frame, which the georef stage
 // turns by the ping's roll, pitch and heading. The vessel's reference point is at the channel
 // offsets' origin, `ReferencePointHeight` above the water line, and moves with the heave (positive
-// up). Pings outside the span of the fixes are counted, not kept.
+// up). Pings outside the span of the fixes, or more than a second from the attitude, are counted,
+// not kept.
 #include <cstdint>
 #include <filesystem>
 #include <map>
