@@ -107,18 +107,9 @@ std::optional<Record> Reader::next() {
     checksum = BigEndianCursor(std::span<const std::uint8_t>(word, 4)).u32();
     data_offset += 4;
   }
-  // Grown as bytes arrive, so a size that runs past the end costs no more than the file holds.
-  data_.clear();
-  constexpr std::size_t kChunk = 1 << 20;
-  while (data_.size() < size) {
-    const std::size_t want = std::min<std::size_t>(kChunk, size - data_.size());
-    const std::size_t have = data_.size();
-    data_.resize(have + want);
-    const std::size_t n = read_fully(source_, reinterpret_cast<char*>(data_.data() + have), want);
-    if (n < want) {
-      fail(record_offset, "truncated: the record declares " + std::to_string(size) + " data bytes but the file ends after " +
-                              std::to_string(have + n));
-    }
+  if (const std::size_t got = read_record(source_, size, data_); got < size) {
+    fail(record_offset, "truncated: the record declares " + std::to_string(size) + " data bytes but the file ends after " +
+                            std::to_string(got));
   }
   offset_ = data_offset + size;
   if (has_checksum) {

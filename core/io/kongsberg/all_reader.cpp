@@ -117,17 +117,9 @@ std::optional<Datagram> Reader::next() {
     throw AllError(file_, at, "datagram length", std::to_string(length) + " bytes is over the " +
                                                    std::to_string(kMaxDatagramBytes) + "-byte limit");
   }
-  // Read in steps, so that a length running past the end costs only what the file holds.
-  bytes_.clear();
-  while (bytes_.size() < length) {
-    const std::size_t step = std::min<std::size_t>(length - bytes_.size(), 1u << 20);
-    const std::size_t old = bytes_.size();
-    bytes_.resize(old + step);
-    const std::size_t n = read_fully(source_, bytes_.data() + old, step);
-    if (n < step) {
-      throw AllError(file_, at, "datagram length",
-                     std::to_string(length) + " bytes run past the end of the file (" + std::to_string(old + n) + " left)");
-    }
+  if (const std::size_t got = read_record(source_, length, bytes_); got < length) {
+    throw AllError(file_, at, "datagram length",
+                   std::to_string(length) + " bytes run past the end of the file (" + std::to_string(got) + " left)");
   }
   offset_ += 4 + length;
   ++datagrams_;

@@ -294,18 +294,10 @@ std::optional<Packet> Reader::next() {
     throw XtfError(file_, at, "NumBytesThisRecord",
                    std::to_string(length) + " bytes is over the " + std::to_string(kMaxPacketBytes) + "-byte limit");
   }
-  // Read in steps, so that a length running past the end costs only what the file holds.
   const std::size_t body = length - kPacketHeaderBytes;
-  bytes_.clear();
-  while (bytes_.size() < body) {
-    const std::size_t step = std::min<std::size_t>(body - bytes_.size(), 1u << 20);
-    const std::size_t old = bytes_.size();
-    bytes_.resize(old + step);
-    const std::size_t n = read_fully(source_, bytes_.data() + old, step);
-    if (n < step) {
-      throw XtfError(file_, at, "NumBytesThisRecord",
-                     std::to_string(length) + " bytes run past the end of the file (" + std::to_string(kPacketHeaderBytes + old + n) + " left)");
-    }
+  if (const std::size_t got = read_record(source_, body, bytes_); got < body) {
+    throw XtfError(file_, at, "NumBytesThisRecord",
+                   std::to_string(length) + " bytes run past the end of the file (" + std::to_string(kPacketHeaderBytes + got) + " left)");
   }
   offset_ += length;
   ++packets_;
