@@ -113,18 +113,17 @@ struct Jump {
 // the least-squares ε under each one's covariance S (Σ gᵀS⁻¹d / Σ gᵀS⁻¹g) and its share of their
 // weighted sum of squares ((Σ gᵀS⁻¹d)² / Σ gᵀS⁻¹g): the registrations that agree with dead
 // reckoning pull it towards no jump wherever they span, and the lever arms place it. Only steps
-// that an innovation `unexplained` names spans are tried.
-Jump best_jump(const std::vector<Term>& terms, const std::vector<char>& unexplained, Scales scales,
-               const std::vector<Eigen::Isometry3d>& dead_reckoning) {
+// that an innovation `fit` leaves unexplained spans are tried.
+Jump best_jump(const std::vector<Term>& terms, const Fit& fit, const std::vector<Eigen::Isometry3d>& dead_reckoning) {
   const int steps = static_cast<int>(dead_reckoning.size()) - 1;
   std::vector<char> tried(std::max(steps, 0), 0);
   for (std::size_t k = 0; k < terms.size(); ++k) {
-    if (!unexplained[k]) continue;
+    if (fit.explained[k]) continue;
     for (int m = terms[k].first_step; m < terms[k].end_step && m < steps; ++m) tried[m] = 1;
   }
   std::vector<Eigen::Matrix3d> information(terms.size());
   for (std::size_t k = 0; k < terms.size(); ++k) {
-    information[k] = covariance(terms[k], scales.log_t, scales.log_yaw).inverse();
+    information[k] = covariance(terms[k], fit.scales.log_t, fit.scales.log_yaw).inverse();
   }
   Jump best;
   double best_gain = 0;
@@ -226,17 +225,14 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
   Fit best = fit(terms, config, lowest);
 
   // Heading steps, one at a time while each explains enough of what the noise leaves out.
-  const auto unexplained_count = [](const Fit& f) { return static_cast<int>(f.explained.size()) - f.count; };
   for (auto found = out.heading_steps.size(); found < static_cast<std::size_t>(config.max_heading_steps) && dead_reckoning.size() > 1;
        ++found) {
-    std::vector<char> unexplained(best.explained.size());
-    for (std::size_t k = 0; k < unexplained.size(); ++k) unexplained[k] = !best.explained[k];
-    const Jump jump = best_jump(terms, unexplained, best.scales, dead_reckoning);
+    const Jump jump = best_jump(terms, best, dead_reckoning);
     if (jump.step < 0) break;
     std::vector<Term> with_step = terms;
     add_heading_step(with_step, innovations, dead_reckoning, prior, jump.step, std::abs(jump.turn));
     const Fit next = fit(with_step, config, lowest);
-    const int explained = unexplained_count(best) - unexplained_count(next);
+    const int explained = next.count - best.count;  // of the same innovations
     if (explained < config.min_registrations) break;
     out.graph.step_yaw_sigma_rad[jump.step] = std::abs(jump.turn);
     out.heading_steps.push_back({jump.step, -jump.turn, explained});
