@@ -2,7 +2,8 @@
 # The README's main-job command: the whole product on this machine. Builds, starts a private
 # PostgreSQL (scripts/pg.sh) and bathyslam-server, simulates the `small` survey, uploads it,
 # runs an `mchs` job, watches it, saves the report and the map
-# tiles, prints where they are, and stops the server and PostgreSQL.
+# tiles, reads the map over the HTTP endpoint with GDAL, prints where they are, and stops the
+# server and PostgreSQL.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -19,13 +20,14 @@ stop() {
   bash scripts/pg.sh stop "$pg" > /dev/null || true
 }
 trap stop EXIT
-"$bin/server/bathyslam-server" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant demo \
+"$bin/server/bathyslam-server" --db "$url" --migrate --listen 127.0.0.1:0 --http 127.0.0.1:0 --workers 1 --dev-tenant demo \
   > "$out/server.out" 2> "$out/server.log" &
 server_pid=$!
 for _ in $(seq 100); do grep -q "listening" "$out/server.out" && break; sleep 0.1; done
 BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$out/server.out")
 [ -n "$BATHYSLAM_SERVER" ] || { cat "$out/server.log" >&2; exit 1; }
 export BATHYSLAM_SERVER
+http=$(sed -n 's/.*http on //p' "$out/server.out")
 
 "$bin/client/bathyslam" simulate --scenario small --seed 1 --drift paper --out "$out/small"
 "$bin/client/bathyslam" inspect --json "$out/small" > "$out/small-summary.json"
@@ -36,6 +38,10 @@ mkdir -p "$out/job-$job"
 "$bin/client/bathyslam" report "$job" --out "$out/job-$job" | tee "$out/job-$job/report.txt"
 "$bin/client/bathyslam" tiles "$job" --out "$out/job-$job/tiles"
 "$bin/client/bathyslam" map "$job" --out "$out/job-$job/map.tif"
+# The same map as GIS tools read it from the server: a COG over HTTP range requests.
+echo
+echo "gdalinfo /vsicurl/$http/v1/jobs/$job/map.tif"
+GDAL_DISABLE_READDIR_ON_OPEN=EMPTY_DIR gdalinfo "/vsicurl/$http/v1/jobs/$job/map.tif" | sed -n '1,2p;/Size is/p;/Pixel Size/p'
 echo
 echo "bundle:      $out/small (summary $out/small-summary.json)"
 echo "report:      $out/job-$job (report.txt, report.json, *.png)"

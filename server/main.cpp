@@ -22,6 +22,7 @@
 
 #include "core/types/format.h"
 #include "server/database_health.h"
+#include "server/http/http_api.h"
 #include "server/log.h"
 #include "server/scheduler/scheduler.h"
 #include "server/scratch_dir.h"
@@ -137,8 +138,21 @@ struct ServeOptions {
   int lease_seconds = 30;
   int statement_timeout_seconds = 60;
   std::string tls_cert, tls_key, tls_client_ca;  // PEM files; no certificate: plaintext
+  std::string http;  // HOST:PORT of the HTTP endpoint; empty: none
   service::Limits limits;
 };
+
+// --http's HOST:PORT (a bare PORT is on the loopback interface).
+bathyslam::server::http::HttpOptions http_options(const ServeOptions& o) {
+  bathyslam::server::http::HttpOptions h{.tls_cert = o.tls_cert, .tls_key = o.tls_key, .tls_client_ca = o.tls_client_ca};
+  const std::size_t colon = o.http.rfind(':');
+  if (colon != std::string::npos) h.host = o.http.substr(0, colon);
+  const std::string port = colon == std::string::npos ? o.http : o.http.substr(colon + 1);
+  const auto [end, error] = std::from_chars(port.data(), port.data() + port.size(), h.port);
+  if (error != std::errc() || end != port.data() + port.size() || h.port < 0 || h.port > 65535 || h.host.empty())
+    throw std::runtime_error("--http: expected HOST:PORT (port 0: any free port), not '" + o.http + "'");
+  return h;
+}
 
 std::string read_pem(const std::string& option, const std::string& path) {
   std::ifstream in(path);
@@ -224,6 +238,8 @@ int serve(const ServeOptions& o) {
                                .retry = {}, .max_map_cells = o.limits.max_map_cells});
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
+  std::unique_ptr<bathyslam::server::http::HttpApi> http;
+  if (!o.http.empty()) http = std::make_unique<bathyslam::server::http::HttpApi>(context, http_options(o));
   std::thread stopper([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
@@ -233,12 +249,18 @@ int serve(const ServeOptions& o) {
   // The port actually bound (":0" asks for any free one): tests and scripts read it here.
   const std::string address = o.listen.substr(0, o.listen.rfind(':')) + ":" + std::to_string(port);
   std::printf("bathyslam-server listening on %s\n", address.c_str());
+  if (http) {
+    const std::string http_host = o.http.substr(0, o.http.rfind(':'));
+    std::printf("bathyslam-server http on %s://%s:%d\n", o.tls_cert.empty() ? "http" : "https",
+                o.http.find(':') == std::string::npos ? "127.0.0.1" : http_host.c_str(), http->port());
+  }
   std::fflush(stdout);
   service::log("listening on %s; %d workers; %s", address.c_str(), o.workers,
               context.dev_tenant ? ("callers without a token act as tenant '" + o.dev_tenant + "'").c_str()
                                  : "an API token is required");
   server->Wait();
   stopper.join();
+  http.reset();
   scheduler.stop();
   std::error_code ignored;
   if (o.scratch.empty()) std::filesystem::remove_all(scratch, ignored);
@@ -272,6 +294,10 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", o.tls_cert, "PEM certificate (chain): serve TLS")->envname("BATHYSLAM_TLS_CERT");
   app.add_option("--tls-key", o.tls_key, "PEM private key of --tls-cert")->envname("BATHYSLAM_TLS_KEY");
   app.add_option("--tls-client-ca", o.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
+  app.add_option("--http", o.http,
+                 "HOST:PORT (or PORT, on 127.0.0.1) of an HTTP endpoint serving surveys, jobs, reports and maps\n"
+                 "(COG by range requests) with the same tokens; TLS as for gRPC; port 0: any free port")
+      ->envname("BATHYSLAM_HTTP");
   app.add_option("--statement-timeout", o.statement_timeout_seconds,
                  "seconds after which PostgreSQL cancels a statement of a request or a job")
       ->capture_default_str()->check(CLI::Range(1, 3600));

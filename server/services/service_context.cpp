@@ -29,15 +29,20 @@ void check_name(const std::string& field, std::string_view name, std::size_t max
 std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call) {
   const auto& metadata = call.client_metadata();
   const auto header = metadata.find("authorization");
-  if (header == metadata.end()) {
+  if (header == metadata.end()) return tenant_of_authorization(context, nullptr);
+  const std::string value(header->second.data(), header->second.size());
+  return tenant_of_authorization(context, &value);
+}
+
+std::int64_t tenant_of_authorization(const ServiceContext& context, const std::string* authorization) {
+  if (!authorization) {
     if (context.dev_tenant) return *context.dev_tenant;
     throw Refusal(grpc::StatusCode::UNAUTHENTICATED, "authorization: send 'Bearer <token>' (bathyslam-server token)");
   }
-  const std::string value(header->second.data(), header->second.size());
   constexpr std::string_view kBearer = "Bearer ";
-  if (value.rfind(kBearer, 0) != 0)
+  if (authorization->rfind(kBearer, 0) != 0)
     throw Refusal(grpc::StatusCode::UNAUTHENTICATED, "authorization: expected 'Bearer <token>'");
-  if (auto tenant = context.surveys.tenant_of_token(value.substr(kBearer.size()))) return *tenant;
+  if (auto tenant = context.surveys.tenant_of_token(authorization->substr(kBearer.size()))) return *tenant;
   throw Refusal(grpc::StatusCode::UNAUTHENTICATED, "authorization: unknown or revoked token");
 }
 
@@ -113,9 +118,15 @@ grpc::Status write_failure(const char* method, const WriteError& error) {
 }  // namespace
 
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body) {
+  grpc::Status status = status_of(method, body);
+  if (status.ok() && call->IsCancelled())
+    return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call ended before the reply");
+  return status;
+}
+
+grpc::Status status_of(const char* method, const std::function<void()>& body) {
   try {
     body();
-    if (call->IsCancelled()) return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the call ended before the reply");
     return grpc::Status::OK;
   } catch (const Refusal& refusal) {
     return grpc::Status(refusal.code(), refusal.what());

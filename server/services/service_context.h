@@ -69,6 +69,8 @@ void check_name(const std::string& field, std::string_view name, std::size_t max
 // The tenant of the caller: `authorization: Bearer <token>` metadata, or the dev tenant.
 // UNAUTHENTICATED otherwise.
 std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call);
+// The same from the authorization header's value (nullptr: none sent), for HTTP as for gRPC.
+std::int64_t tenant_of_authorization(const ServiceContext& context, const std::string* authorization);
 
 // The survey / job if it exists and belongs to the tenant; NOT_FOUND otherwise (another
 // tenant's ids are indistinguishable from unknown ones).
@@ -89,5 +91,7 @@ std::int64_t page_token(const std::string& token);
 // the server itself failed at is logged whole and never sent: SQL states, PostgreSQL's messages
 // and server paths stay in the log. A call past its deadline is DEADLINE_EXCEEDED.
 grpc::Status handle(const char* method, grpc::ServerContext* call, const std::function<void()>& body);
+// handle() without a call to check: the status alone (the HTTP endpoint's handlers).
+grpc::Status status_of(const char* method, const std::function<void()>& body);
 
 }  // namespace bathyslam::server

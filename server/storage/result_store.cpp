@@ -260,6 +260,28 @@ std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) 
   return row.bytes(0, "data");
 }
 
+std::optional<std::int64_t> ResultStore::tile_size(std::int64_t job_id, const TileKey& key) {
+  auto connection = pool_.acquire();
+  Result row = connection->exec(
+      "SELECT octet_length(data) AS size FROM tiles"
+      " WHERE job_id = $1 AND format = $2 AND level = $3 AND tile_col = $4 AND tile_row = $5",
+      {job_id, key.format, key.level, key.col, key.row});
+  if (row.rows() == 0) return std::nullopt;
+  return row.int64(0, "size");
+}
+
+Bytes ResultStore::tile_bytes(std::int64_t job_id, const TileKey& key, std::int64_t offset, std::int64_t length) {
+  auto connection = pool_.acquire();
+  // substring() of an uncompressed TOAST value reads only the chunks it spans (a COG's deflated
+  // bytes are stored uncompressed: PostgreSQL's compression gains nothing on them).
+  Result row = connection->exec(
+      "SELECT substring(data FROM $6 FOR $7) AS data FROM tiles"
+      " WHERE job_id = $1 AND format = $2 AND level = $3 AND tile_col = $4 AND tile_row = $5",
+      {job_id, key.format, key.level, key.col, key.row, offset + 1, length});
+  if (row.rows() == 0) return {};
+  return row.bytes(0, "data");
+}
+
 std::vector<SubmapPose> ResultStore::submap_poses(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Result rows = connection->exec("SELECT idx, time_mid, dr_pose FROM submaps WHERE job_id = $1 ORDER BY idx", {job_id});
@@ -328,6 +350,27 @@ bool ResultStore::read_file(std::int64_t job_id, const std::string& name, const 
     sink(chunk.bytes(0, "data"));
   }
   return true;
+}
+
+Bytes ResultStore::file_bytes(std::int64_t job_id, const std::string& name, std::int64_t offset, std::int64_t length) {
+  auto connection = pool_.acquire();
+  // Every chunk but the last holds as many bytes as the first (put_file).
+  Result first = connection->exec(
+      "SELECT octet_length(data) AS size FROM job_file_chunks WHERE job_id = $1 AND name = $2 AND seq = 0", {job_id, name});
+  if (first.rows() == 0 || length <= 0) return {};
+  const std::int64_t chunk = std::max<std::int64_t>(1, first.int64(0, "size"));
+  Result rows = connection->exec(
+      "SELECT seq, data FROM job_file_chunks WHERE job_id = $1 AND name = $2 AND seq BETWEEN $3 AND $4 ORDER BY seq",
+      {job_id, name, offset / chunk, (offset + length - 1) / chunk});
+  Bytes out;
+  for (int row = 0; row < rows.rows(); ++row) {
+    const Bytes data = rows.bytes(row, "data");
+    const std::int64_t start = rows.int64(row, "seq") * chunk;
+    const std::int64_t from = std::max(offset, start) - start;
+    const std::int64_t to = std::min<std::int64_t>(offset + length - start, static_cast<std::int64_t>(data.size()));
+    if (from < to) out.insert(out.end(), data.begin() + from, data.begin() + to);
+  }
+  return out;
 }
 
 void ResultStore::save_map_grid(std::int64_t job_id, const MapGrid& g) {

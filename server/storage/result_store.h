@@ -75,6 +75,10 @@ class ResultStore {
   void put_tile(std::int64_t job_id, const TileKey& key, const Bytes& data);  // replaces the same key
   std::optional<Bytes> tile(std::int64_t job_id, const TileKey& key);
   std::vector<TileKey> tiles(std::int64_t job_id);  // every stored tile, without its bytes
+  // A stored tile's size, and `length` of its bytes from `offset` (fewer at its end): a range of
+  // the whole map (the COG) without reading the rest of it.
+  std::optional<std::int64_t> tile_size(std::int64_t job_id, const TileKey& key);
+  Bytes tile_bytes(std::int64_t job_id, const TileKey& key, std::int64_t offset, std::int64_t length);
 
   // A file product (plain name: letters, digits, '.', '_', '-'), read from `path` chunk by
   // chunk and stored in one transaction; replaces a file of that name. Memory: one chunk.
@@ -83,6 +87,8 @@ class ResultStore {
   // Hands the file's chunks to `sink` in order, one query each (memory: one chunk); false when
   // there is no such file. Throws std::runtime_error when a chunk is missing.
   bool read_file(std::int64_t job_id, const std::string& name, const std::function<void(const Bytes&)>& sink);
+  // `length` bytes of the file from `offset` (fewer at its end), from the chunks they span only.
+  Bytes file_bytes(std::int64_t job_id, const std::string& name, std::int64_t offset, std::int64_t length);
 
   void save_map_grid(std::int64_t job_id, const MapGrid& grid);
   std::optional<MapGrid> map_grid(std::int64_t job_id);

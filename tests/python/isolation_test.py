@@ -11,8 +11,8 @@ import unittest
 import grpc
 from google.protobuf import descriptor_pb2, symbol_database
 
-from service_api_test import (Server, database_fingerprint, job_pb2, map_pb2, psql, read, ready_survey, survey_pb2,
-                              token, upload_requests)
+from service_api_test import (Server, database_fingerprint, job_pb2, map_pb2, psql, read, ready_survey,
+                              restart_asking_for_tokens, survey_pb2, upload_requests)
 from reliability_test import final_state
 
 SERVICES = [module.DESCRIPTOR.services_by_name[name]
@@ -45,16 +45,7 @@ class IsolationMatrixTest(unittest.TestCase):
         assert final_state(s, job.id).state == job_pb2.SUCCEEDED, s.server_log()
         cls.job = job.id
         cls.tile = next(t for t in s.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30).tiles)
-        s.halt()
-        s.args = []
-        s.start()
-        cls.tokens = {"owner": token(s.url, "create", "--tenant", "owner"),
-                      "another tenant": token(s.url, "create", "--tenant", "intruder"),
-                      "wrong token": "bst_" + "0" * 40}
-        revoked = token(s.url, "create", "--tenant", "owner", "--description", "to revoke")
-        listed = token(s.url, "list", "--tenant", "owner")
-        token(s.url, "revoke", "--id", next(line.split()[0] for line in listed.splitlines() if line.endswith("to revoke")))
-        cls.tokens["revoked token"] = revoked
+        cls.tokens = restart_asking_for_tokens(s)
         cls.owner_tenant, cls.intruder_tenant = (int(psql(s.url, f"SELECT id FROM tenants WHERE name = '{name}'"))
                                                  for name in ("owner", "intruder"))
         cls.created = 0

@@ -52,6 +52,23 @@ def token(db_url, *args):
                           capture_output=True).stdout.strip()
 
 
+def restart_asking_for_tokens(server):
+    """Restarts a development server (its dev tenant "owner") asking every caller for a token;
+    returns the callers of the isolation tests: the owner's token, another tenant's ("intruder"),
+    a wrong one and the owner's revoked one."""
+    server.halt()
+    server.args = []
+    server.start()
+    tokens = {"owner": token(server.url, "create", "--tenant", "owner"),
+              "another tenant": token(server.url, "create", "--tenant", "intruder"),
+              "wrong token": "bst_" + "0" * 40}
+    revoked = token(server.url, "create", "--tenant", "owner", "--description", "to revoke")
+    listed = token(server.url, "list", "--tenant", "owner")
+    token(server.url, "revoke", "--id", next(line.split()[0] for line in listed.splitlines() if line.endswith("to revoke")))
+    tokens["revoked token"] = revoked
+    return tokens
+
+
 def database_fingerprint(url, rows_where=None):
     """Row counts and checksums of every table, bytes hashed rather than printed. `rows_where`
     maps a table to the SQL condition of the rows that count (e.g. another tenant's surveys left

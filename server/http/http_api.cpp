@@ -1,0 +1,268 @@
+#include "server/http/http_api.h"
+
+#include <algorithm>
+#include <charconv>
+#include <functional>
+#include <stdexcept>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "core/products/corrected_gsf.h"
+#include "server/http/byte_range.h"
+#include "server/log.h"
+
+namespace bathyslam::server::http {
+namespace {
+
+namespace storage = bathyslam::storage;
+using json = nlohmann::json;
+
+constexpr std::int64_t kChunkBytes = 1 << 20;  // read from the database per write: memory per download
+
+int http_status(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK: return 200;
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::OUT_OF_RANGE: return 400;
+    case grpc::StatusCode::UNAUTHENTICATED: return 401;
+    case grpc::StatusCode::PERMISSION_DENIED: return 403;
+    case grpc::StatusCode::NOT_FOUND: return 404;
+    case grpc::StatusCode::ALREADY_EXISTS:
+    case grpc::StatusCode::ABORTED:
+    case grpc::StatusCode::FAILED_PRECONDITION: return 409;
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return 429;
+    case grpc::StatusCode::UNAVAILABLE: return 503;
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return 504;
+    default: return 500;
+  }
+}
+
+void send_json(httplib::Response& res, const json& body, int status = 200) {
+  res.status = status;
+  res.set_content(body.dump(), "application/json");
+}
+
+std::int64_t id_in_path(const httplib::Request& req, int group, const std::string& field) {
+  const std::string text = req.matches[group];
+  std::int64_t id = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
+  if (error != std::errc() || end != text.data() + text.size() || id <= 0)
+    throw invalid(field, "'" + text + "' is not a positive 64-bit id");
+  return id;
+}
+
+int page_size_of(const httplib::Request& req) {
+  if (!req.has_param("page_size")) return page_size(0);
+  const std::string text = req.get_param_value("page_size");
+  int size = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), size);
+  if (error != std::errc() || end != text.data() + text.size()) throw invalid("page_size", "'" + text + "' is not a number");
+  return page_size(size);
+}
+
+json job_json(const storage::JobRecord& job) {
+  json j = {{"id", job.id},
+            {"survey_id", job.survey_id},
+            {"configuration", job.configuration},
+            {"state", storage::to_string(job.state)},
+            {"stage", job.stage},
+            {"progress", job.progress},
+            {"attempts", job.attempts},
+            {"created_at", job.created_at},
+            {"started_at", job.started_at},
+            {"finished_at", job.finished_at}};
+  if (job.error) j["error"] = *job.error;
+  return j;
+}
+
+// A stored product read by ranges: one database read of at most a MiB per write to the client.
+struct Product {
+  std::int64_t size = 0;
+  std::string content_type;
+  std::string etag;  // the job's products never change once stored
+  std::function<storage::Bytes(std::int64_t offset, std::int64_t length)> read;
+};
+
+void send_product(const httplib::Request& req, httplib::Response& res, const Product& product) {
+  res.set_header("Accept-Ranges", "bytes");
+  res.set_header("ETag", product.etag);
+  if (req.get_header_value("If-None-Match") == product.etag) {
+    res.status = 304;
+    return;
+  }
+  const RangeAnswer answer = answer_range(req.get_header_value("Range"), product.size);
+  if (answer.kind == RangeAnswer::kUnsatisfiable) {
+    res.set_header("Content-Range", "bytes */" + std::to_string(product.size));
+    send_json(res, {{"error", "Range: " + req.get_header_value("Range") + " starts beyond the " +
+                                  std::to_string(product.size) + " bytes of the file"}},
+              416);
+    return;
+  }
+  if (answer.kind == RangeAnswer::kPartial) {
+    res.status = 206;
+    res.set_header("Content-Range", "bytes " + std::to_string(answer.offset) + "-" +
+                                        std::to_string(answer.offset + answer.length - 1) + "/" +
+                                        std::to_string(product.size));
+  } else {
+    res.status = 200;
+  }
+  const std::int64_t start = answer.offset;
+  const auto read = product.read;
+  res.set_content_provider(static_cast<std::size_t>(answer.length), product.content_type,
+                           [read, start](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                             // Runs after the handler, outside its error handling: a failure ends the
+                             // response short, which the client sees as a cut download.
+                             try {
+                               const storage::Bytes data = read(start + static_cast<std::int64_t>(offset),
+                                                                std::min<std::int64_t>(static_cast<std::int64_t>(length), kChunkBytes));
+                               if (data.empty()) return false;
+                               return sink.write(reinterpret_cast<const char*>(data.data()), data.size());
+                             } catch (const std::exception& error) {
+                               log("http: reading a product at byte %zu: %s", offset, error.what());
+                               return false;
+                             }
+                           });
+}
+
+Product stored_map(ServiceContext& context, const storage::JobRecord& job, const std::string& format,
+                   const std::string& content_type) {
+  const storage::TileKey key{format, 0, 0, 0};
+  const auto size = context.results.tile_size(job.id, key);
+  if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + format + " map");
+  return {*size, content_type, "\"job" + std::to_string(job.id) + "-" + format + "-" + std::to_string(*size) + "\"",
+          [&context, id = job.id, key](std::int64_t offset, std::int64_t length) {
+            return context.results.tile_bytes(id, key, offset, length);
+          }};
+}
+
+}  // namespace
+
+HttpApi::HttpApi(ServiceContext& context, const HttpOptions& options) : context_(context) {
+  if (options.tls_cert.empty() != options.tls_key.empty()) throw std::runtime_error("--tls-cert and --tls-key go together");
+  if (options.tls_cert.empty()) {
+    server_ = std::make_unique<httplib::Server>();
+  } else {
+    auto tls = std::make_unique<httplib::SSLServer>(options.tls_cert.c_str(), options.tls_key.c_str(),
+                                                    options.tls_client_ca.empty() ? nullptr : options.tls_client_ca.c_str());
+    if (!tls->is_valid()) throw std::runtime_error("--http: cannot serve TLS with " + options.tls_cert + " and " + options.tls_key);
+    server_ = std::move(tls);
+  }
+  add_routes();
+  port_ = options.port == 0 ? server_->bind_to_any_port(options.host)
+                            : (server_->bind_to_port(options.host, options.port) ? options.port : -1);
+  if (port_ <= 0)
+    throw std::runtime_error("--http: cannot listen on " + options.host + ":" + std::to_string(options.port));
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
+}
+
+HttpApi::~HttpApi() {
+  server_->stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+void HttpApi::add_routes() {
+  using Body = std::function<void(const httplib::Request&, httplib::Response&, std::int64_t tenant)>;
+  // Every route: the caller's tenant first, refusals as JSON {"error": ...} with the status the
+  // gRPC API would give in HTTP's words, and one log line with what was sent.
+  const auto route = [this](const std::string& pattern, Body body) {
+    server_->Get(pattern, [this, body](const httplib::Request& req, httplib::Response& res) {
+      // The library's range handling is off: send_product answers ranges (byte_range.h).
+      const_cast<httplib::Request&>(req).ranges.clear();
+      res.status = 200;
+      const grpc::Status status = status_of(("HTTP GET " + req.path).c_str(), [&] {
+        const std::string authorization = req.get_header_value("Authorization");
+        const std::int64_t tenant =
+            tenant_of_authorization(context_, req.has_header("Authorization") ? &authorization : nullptr);
+        body(req, res, tenant);
+      });
+      if (!status.ok()) {
+        if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) res.set_header("WWW-Authenticate", "Bearer");
+        res.content_provider_ = nullptr;
+        send_json(res, {{"error", status.error_message()}}, http_status(status.error_code()));
+      }
+      log("http %s %s %d %zu bytes", req.method.c_str(), req.path.c_str(), res.status,
+          res.content_provider_ ? res.content_length_ : res.body.size());
+    });
+  };
+
+  route("/v1/surveys", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const int limit = page_size_of(req);
+    const std::int64_t after = page_token(req.get_param_value("page_token"));
+    json surveys = json::array();
+    std::int64_t last = 0;
+    for (const storage::SurveyRecord& s : context_.surveys.list_surveys(tenant, after, limit + 1)) {
+      if (static_cast<int>(surveys.size()) == limit) break;
+      surveys.push_back({{"id", s.id}, {"name", s.name}, {"crs", s.crs}, {"ready", s.ready}});
+      last = s.id;
+    }
+    json reply = {{"surveys", surveys}};
+    if (static_cast<int>(surveys.size()) == limit && last > 0) reply["next_page_token"] = std::to_string(last);
+    send_json(res, reply);
+  });
+  route("/v1/jobs", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const int limit = page_size_of(req);
+    const std::int64_t before = page_token(req.get_param_value("page_token"));
+    std::optional<std::int64_t> survey;
+    if (req.has_param("survey_id")) survey = owned_survey(context_, tenant, page_token(req.get_param_value("survey_id"))).id;
+    json jobs = json::array();
+    std::int64_t last = 0;
+    for (const storage::JobRecord& job : context_.jobs.list_jobs(tenant, survey, before, limit + 1)) {
+      if (static_cast<int>(jobs.size()) == limit) break;
+      jobs.push_back(job_json(job));
+      last = job.id;
+    }
+    json reply = {{"jobs", jobs}};
+    if (static_cast<int>(jobs.size()) == limit && last > 0) reply["next_page_token"] = std::to_string(last);
+    send_json(res, reply);
+  });
+  route(R"(/v1/jobs/([0-9]+))", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    send_json(res, job_json(owned_job(context_, tenant, id_in_path(req, 1, "job_id"))));
+  });
+  route(R"(/v1/jobs/([0-9]+)/report\.json)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    auto report = context_.results.load_report(job.id);
+    if (!report) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " is " + storage::to_string(job.state) + " and has no report");
+    send_json(res, report->report);
+  });
+  route(R"(/v1/jobs/([0-9]+)/plots/([A-Za-z0-9_-]+\.png))",
+        [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+          const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+          const std::string name = req.matches[2];
+          const auto report = context_.results.load_report(job.id);
+          if (!report || !report->plots.contains(name))
+            throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no plot '" + name + "'");
+          const storage::Bytes& png = report->plots.at(name);
+          res.set_content(std::string(png.begin(), png.end()), "image/png");
+        });
+  route(R"(/v1/jobs/([0-9]+)/map\.tif)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    send_product(req, res, stored_map(context_, job, "cog", "image/tiff; application=geotiff; profile=cloud-optimized"));
+  });
+  route(R"(/v1/jobs/([0-9]+)/map\.bag)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    send_product(req, res, stored_map(context_, job, "bag", "application/x-hdf5"));
+  });
+  route(R"(/v1/jobs/([0-9]+)/corrected\.gsf)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
+    if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
+    send_product(req, res,
+                 {*size, "application/octet-stream", "\"job" + std::to_string(job.id) + "-gsf-" + std::to_string(*size) + "\"",
+                  [this, id = job.id](std::int64_t offset, std::int64_t length) {
+                    return context_.results.file_bytes(id, kCorrectedGsfFile, offset, length);
+                  }});
+  });
+  // Any other path, and the library's own refusals (a malformed Range: 416), say so in JSON too.
+  server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty() || res.content_provider_) return;
+    std::string what = "refused (HTTP " + std::to_string(res.status) + ")";
+    if (res.status == 404) what = "no such resource: " + req.path;
+    if (res.status == 416) what = "Range: cannot read '" + req.get_header_value("Range") + "'";
+    if (res.status == 400) what = "the request line or a header is malformed or too long (8 KiB at most)";
+    if (res.status == 414) what = "the URI is too long (8 KiB at most)";
+    send_json(res, {{"error", what}}, res.status);
+  });
+}
+
+}  // namespace bathyslam::server::http

@@ -1,0 +1,207 @@
+#!/usr/bin/env python3
+"""The HTTP endpoint (`bathyslam-server --http`) against a real server and PostgreSQL: GDAL reads
+a job's map through /vsicurl/ with the bearer token in a few range requests, the bytes are the
+gRPC API's; ranges, paths and every route x caller answer as they should, and no refusal changes
+the database. The same environment as service_api_test.py (set by ctest)."""
+import http.client
+import json
+import os
+import re
+import unittest
+import urllib.parse
+
+from osgeo import gdal
+
+from service_api_test import STUBS, Server, database_fingerprint, job_pb2, map_pb2, ready_survey, restart_asking_for_tokens
+from reliability_test import final_state
+
+gdal.UseExceptions()
+
+
+class HttpServer(Server):
+    """A Server with the HTTP endpoint on a free port: `self.http` is its base URL."""
+
+    def start(self):
+        if "--http" not in self.args:
+            self.args += ["--http", "127.0.0.1:0"]
+        super().start()
+        line = self.process.stdout.readline()
+        match = re.search(r"http on (\S+)", line)
+        if not match:
+            raise RuntimeError("no HTTP endpoint: " + line + self.server_log())
+        self.http = match.group(1)
+
+
+class HttpApiTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        # The owner's survey and job are made on a development server, which then restarts
+        # asking every caller for a token (as isolation_test.py does).
+        cls.server = HttpServer(dev_tenant="owner")
+        s = cls.server
+        cls.survey = ready_survey(s.surveys, "ready")
+        job = s.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=cls.survey, configuration="mchs"), timeout=30)
+        assert final_state(s, job.id).state == job_pb2.SUCCEEDED, s.server_log()
+        cls.job = job.id
+        cls.cog = b"".join(c.data for c in s.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.COG), timeout=60))
+        cls.tokens = restart_asking_for_tokens(s)
+
+    @classmethod
+    def tearDownClass(cls):
+        if os.environ.get("SHOW_SERVER_LOG"):
+            print(cls.server.server_log())
+        cls.server.stop()
+
+    def get(self, path, who="owner", headers=None):
+        """(status, headers, body) of GET `path` as `who` ("no token" sends none)."""
+        url = urllib.parse.urlsplit(self.server.http)
+        connection = http.client.HTTPConnection(url.hostname, url.port, timeout=60)
+        headers = dict(headers or {})
+        if who != "no token":
+            headers["Authorization"] = "Bearer " + self.tokens[who]
+        connection.request("GET", path, headers=headers)
+        response = connection.getresponse()
+        body = response.read()
+        connection.close()
+        return response.status, response.headers, body
+
+    def served(self, path):
+        """(requests, bytes) the server's log shows for GETs of `path`."""
+        lines = re.findall(r"http (GET|HEAD) " + re.escape(path) + r" \d+ (\d+) bytes", self.server.server_log())
+        return len(lines), sum(int(size) for method, size in lines if method == "GET")  # HEAD sends no body
+
+    def test_gdal_reads_the_map_by_range_requests(self):
+        path = f"/v1/jobs/{self.job}/map.tif"
+        options = {"GDAL_HTTP_HEADERS": "Authorization: Bearer " + self.tokens["owner"],
+                   "GDAL_DISABLE_READDIR_ON_OPEN": "EMPTY_DIR", "VSI_CACHE": "FALSE"}
+        for key, value in options.items():
+            gdal.SetConfigOption(key, value)
+        try:
+            local = os.path.join(STUBS, "grpc_map.tif")
+            with open(local, "wb") as f:
+                f.write(self.cog)
+            mine = gdal.Open(local)
+            before = self.served(path)
+            remote = gdal.Open("/vsicurl/" + self.server.http + path)
+            info = gdal.Info(remote, format="json")
+            self.assertEqual(info["driverShortName"], "GTiff")
+            self.assertEqual(info["size"], [mine.RasterXSize, mine.RasterYSize])
+            self.assertEqual(remote.GetGeoTransform(), mine.GetGeoTransform())
+            self.assertEqual(remote.GetRasterBand(1).ReadRaster(0, 0, 1, 1), mine.GetRasterBand(1).ReadRaster(0, 0, 1, 1))
+            # A window of a quarter of the map, as gdal_translate -srcwin reads it.
+            w, h = max(1, mine.RasterXSize // 2), max(1, mine.RasterYSize // 2)
+            out = os.path.join(STUBS, "window.tif")
+            gdal.Translate(out, remote, srcWin=[w // 2, h // 2, w, h])
+            window = gdal.Open(out)
+            for band in range(1, mine.RasterCount + 1):
+                self.assertEqual(window.GetRasterBand(band).ReadRaster(),
+                                 mine.GetRasterBand(band).ReadRaster(w // 2, h // 2, w, h), f"band {band}")
+            remote = window = None
+            after = self.served(path)
+            requests, sent = after[0] - before[0], after[1] - before[1]
+            # `small`'s map is one 512 x 512 block: every byte is read, but each once, by ranges
+            # (docs/http.md measures a window of the `lake` map).
+            self.assertLessEqual(requests, 4, f"{requests} requests for info and a window")
+            self.assertLessEqual(sent, len(self.cog), f"{sent} bytes sent of {len(self.cog)}: read more than once")
+            self.assertRegex(self.server.server_log(), r"http GET " + re.escape(path) + r" 206 ")
+            print(f"GDAL: info + {w}x{h} window of a {len(self.cog)}-byte COG in {requests} requests, {sent} bytes")
+        finally:
+            for key in options:
+                gdal.SetConfigOption(key, None)
+
+    def test_ranges(self):
+        path, size = f"/v1/jobs/{self.job}/map.tif", len(self.cog)
+        status, headers, body = self.get(path)
+        self.assertEqual((status, body), (200, self.cog))
+        self.assertEqual(headers["Accept-Ranges"], "bytes")
+        etag = headers["ETag"]
+        cases = {"bytes=0-99": (206, 0, 100), "bytes=-1": (206, size - 1, 1), "bytes=10-": (206, 10, size - 10),
+                 f"bytes=100-{size * 2}": (206, 100, size - 100)}
+        for header, (code, offset, length) in cases.items():
+            status, headers, body = self.get(path, headers={"Range": header})
+            self.assertEqual(status, code, header)
+            self.assertEqual(body, self.cog[offset:offset + length], header)
+            self.assertEqual(headers["Content-Range"], f"bytes {offset}-{offset + length - 1}/{size}", header)
+        # Several ranges, overlapping or hundreds, are answered with the whole file; a header
+        # longer than the library's 8 KiB is refused.
+        for header in ("bytes=0-9,5-20", "bytes=" + ",".join(f"{2 * k}-{2 * k}" for k in range(500))):
+            status, _, body = self.get(path, headers={"Range": header})
+            self.assertEqual((status, len(body)), (200, size), header[:40])
+        status, _, body = self.get(path, headers={"Range": "bytes=" + ",".join(f"{9 * k}-{9 * k}" for k in range(1000))})
+        self.assertEqual(status, 400)
+        self.assertIn("too long", json.loads(body)["error"])
+        for header in (f"bytes={size}-", f"bytes={size + 10}-{size + 20}", "bytes=-0"):
+            status, headers, body = self.get(path, headers={"Range": header})
+            self.assertEqual(status, 416, header)
+            self.assertEqual(headers["Content-Range"], f"bytes */{size}", header)
+            self.assertIn("beyond", json.loads(body)["error"], header)
+        status, _, body = self.get(path, headers={"Range": "bytes=abc"})
+        self.assertEqual(status, 416)
+        self.assertIn("Range", json.loads(body)["error"])
+        status, _, body = self.get(path, headers={"If-None-Match": etag})
+        self.assertEqual((status, body), (304, b""))
+
+    def test_lists_job_report_and_plots(self):
+        status, _, body = self.get("/v1/surveys")
+        self.assertEqual(status, 200)
+        self.assertEqual([s["id"] for s in json.loads(body)["surveys"]], [self.survey])
+        status, _, body = self.get("/v1/jobs")
+        jobs = json.loads(body)["jobs"]
+        self.assertEqual([(j["id"], j["state"], j["configuration"]) for j in jobs], [(self.job, "succeeded", "mchs")])
+        status, _, body = self.get(f"/v1/jobs?survey_id={self.survey}&page_size=1")
+        self.assertEqual([j["id"] for j in json.loads(body)["jobs"]], [self.job])
+        status, _, body = self.get(f"/v1/jobs/{self.job}/report.json")
+        self.assertEqual(status, 200)
+        report = json.loads(body)
+        self.assertEqual(report["configuration"], "mchs")
+        self.assertIn("consistency_error_m", report)
+        reply = self.server.jobs.GetReport(job_pb2.GetReportRequest(job_id=self.job), timeout=60,
+                                           metadata=[("authorization", "Bearer " + self.tokens["owner"])])
+        for plot in reply.plots:
+            status, headers, body = self.get(f"/v1/jobs/{self.job}/plots/{plot.name}")
+            self.assertEqual((status, headers["Content-Type"], body), (200, "image/png", plot.png), plot.name)
+        self.assertGreater(len(reply.plots), 0)
+        status, _, body = self.get(f"/v1/jobs/{self.job}/map.bag")
+        self.assertEqual((status, body[:8]), (200, b"\x89HDF\r\n\x1a\n"))
+        # The corrected GSF by ranges, across the boundary of its stored chunks (1 MiB).
+        owner = [("authorization", "Bearer " + self.tokens["owner"])]
+        gsf = b"".join(c.data for c in self.server.maps.GetMap(map_pb2.GetMapRequest(job_id=self.job, format=map_pb2.GSF),
+                                                                 timeout=120, metadata=owner))
+        for first, last in ((0, 99), ((1 << 20) - 500, (1 << 20) + 499), (len(gsf) - 10, len(gsf) + 10)):
+            status, _, body = self.get(f"/v1/jobs/{self.job}/corrected.gsf", headers={"Range": f"bytes={first}-{last}"})
+            self.assertEqual((status, body), (206, gsf[first:last + 1]), (first, last))
+
+    def test_malformed_paths(self):
+        for path, code in ((f"/v1/jobs/{self.job}/../../../etc/passwd", 404), ("/v1/jobs/0", 400),
+                           ("/v1/jobs/99999999999999999999999/map.tif", 400), ("/v1/jobs/x/map.tif", 404),
+                           (f"/v1/jobs/{self.job}/plots/..%2F..%2Fpasswd.png", 404), ("/v1/surveys?page_size=5000", 400),
+                           ("/v1/jobs?page_token=abc", 400), ("/nothing", 404)):
+            status, headers, body = self.get(path)
+            self.assertEqual(status, code, path)
+            self.assertEqual(headers["Content-Type"], "application/json", path)
+            self.assertTrue(json.loads(body)["error"], path)
+
+    def test_every_route_and_caller(self):
+        routes = ["/v1/surveys", "/v1/jobs", f"/v1/jobs?survey_id={self.survey}", f"/v1/jobs/{self.job}",
+                  f"/v1/jobs/{self.job}/report.json", f"/v1/jobs/{self.job}/plots/trajectory.png",
+                  f"/v1/jobs/{self.job}/map.tif", f"/v1/jobs/{self.job}/map.bag"]
+        for route in routes:
+            before = database_fingerprint(self.server.url)
+            for who in ("no token", "wrong token", "revoked token"):
+                status, headers, body = self.get(route, who)
+                self.assertEqual(status, 401, (route, who))
+                self.assertEqual(headers["WWW-Authenticate"], "Bearer")
+                self.assertIn("authorization", json.loads(body)["error"])
+            status, _, body = self.get(route, "another tenant")
+            if route in ("/v1/surveys", "/v1/jobs"):  # a list of the intruder's own: empty
+                self.assertEqual((status, list(json.loads(body).values())[0]), (200, []), route)
+            else:
+                self.assertEqual(status, 404, route)
+                self.assertRegex(json.loads(body)["error"], r"no (survey|job) \d+", route)
+            self.assertEqual(database_fingerprint(self.server.url), before, route)
+            status, _, body = self.get(route, "owner")
+            self.assertEqual(status, 200, (route, body[:200]))
+
+
+if __name__ == "__main__":
+    unittest.main()
