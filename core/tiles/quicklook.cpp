@@ -8,22 +8,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/tiles/relief_colours.h"
+
 namespace bathyslam {
 namespace {
 
 constexpr int kHeader = 40, kFooter = 60;   // title above the map, colour bar below
 constexpr int kMinSide = 600, kMaxSide = 3000;  // map pixels on the longer side
-constexpr double kExaggeration = 3;         // survey relief is metres over hundreds of metres
 const cv::Vec3b kNoData(255, 255, 255), kOneMapOnly(200, 200, 200);
-
-using Ramp = std::vector<cv::Vec3b>;  // 256 BGR colours from the low end to the high end
-
-Ramp turbo_ramp() {
-  cv::Mat levels(1, 256, CV_8U), colours;
-  for (int i = 0; i < 256; ++i) levels.at<uint8_t>(i) = static_cast<uint8_t>(i);
-  cv::applyColorMap(levels, colours, cv::COLORMAP_TURBO);
-  return Ramp(colours.begin<cv::Vec3b>(), colours.end<cv::Vec3b>());
-}
 
 // Blue through white to red (BGR), for signed differences.
 Ramp diverging_ramp() {
@@ -37,30 +29,10 @@ Ramp diverging_ramp() {
   return ramp;
 }
 
-const cv::Vec3b& colour_of(const Ramp& ramp, double value, double lo, double hi) {
-  const double t = std::clamp((value - lo) / (hi - lo), 0.0, 1.0);
-  return ramp[static_cast<int>(std::lround(t * 255))];
-}
-
-// The q-quantiles (0..1) of the finite values; {0, 1} when there are none.
-std::pair<double, double> quantile_range(std::vector<float> values, double q_lo, double q_hi) {
-  std::erase_if(values, [](float v) { return !std::isfinite(v); });
-  if (values.empty()) return {0, 1};
-  auto at = [&](double q) {
-    auto it = values.begin() + static_cast<std::ptrdiff_t>(q * (values.size() - 1));
-    std::nth_element(values.begin(), it, values.end());
-    return static_cast<double>(*it);
-  };
-  double lo = at(q_lo), hi = at(q_hi);
-  if (hi - lo < 1e-3) hi = lo + 1e-3;
-  return {lo, hi};
-}
-
 // Lambertian shade (0..1) of the elevation surface lit from the north-west at 45°; central
 // differences, one-sided beside a cell without data, flat where both neighbours lack it.
 cv::Mat hillshade(const GridRaster& map) {
   const GridGeometry& g = map.geometry;
-  const cv::Vec3d light(-0.5, 0.5, std::sqrt(0.5));  // east, north, up: azimuth 315°, altitude 45°
   cv::Mat shade(g.height, g.width, CV_32F, cv::Scalar(1));
   auto z = [&](int x, int y) {
     return x < 0 || y < 0 || x >= g.width || y >= g.height ? NAN : map.elevation[static_cast<std::size_t>(y) * g.width + x];
@@ -75,10 +47,9 @@ cv::Mat hillshade(const GridRaster& map) {
     for (int x = 0; x < g.width; ++x) {
       const float here = z(x, y);
       if (std::isnan(here)) continue;
-      const double east = kExaggeration * slope(z(x - 1, y), here, z(x + 1, y), g.resolution_m);
-      const double north = kExaggeration * slope(z(x, y + 1), here, z(x, y - 1), g.resolution_m);  // row 0 is north
-      const cv::Vec3d normal = cv::normalize(cv::Vec3d(-east, -north, 1));
-      shade.at<float>(y, x) = static_cast<float>(std::max(0.0, normal.dot(light)));
+      const double east = slope(z(x - 1, y), here, z(x + 1, y), g.resolution_m);
+      const double north = slope(z(x, y + 1), here, z(x, y - 1), g.resolution_m);  // row 0 is north
+      shade.at<float>(y, x) = static_cast<float>(lambert_shade(east, north));
     }
   }
   return shade;
@@ -133,9 +104,7 @@ std::vector<std::uint8_t> hillshade_png(const GridRaster& map, const std::string
         bgr.at<cv::Vec3b>(y, x) = kNoData;
         continue;
       }
-      // Keep a floor of ambient light so that slopes facing away keep their colour.
-      const double light = 0.35 + 0.65 * shade.at<float>(y, x);
-      bgr.at<cv::Vec3b>(y, x) = colour_of(ramp, map.elevation[i], lo, hi) * light;
+      bgr.at<cv::Vec3b>(y, x) = colour_of(ramp, map.elevation[i], lo, hi) * light_of(shade.at<float>(y, x));
     }
   }
   return compose_png(bgr, title, ramp, lo, hi, "elevation (1st to 99th percentile)");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <functional>
 #include <stdexcept>
 
@@ -9,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/products/corrected_gsf.h"
+#include "core/tiles/relief_colours.h"
 #include "server/http/byte_range.h"
 #include "server/log.h"
 
@@ -50,6 +53,28 @@ std::int64_t id_in_path(const httplib::Request& req, int group, const std::strin
   if (error != std::errc() || end != text.data() + text.size() || id <= 0)
     throw invalid(field, "'" + text + "' is not a positive 64-bit id");
   return id;
+}
+
+// A tile coordinate: any int (xyz_tile_bounds says which are in range).
+int coordinate_in_path(const httplib::Request& req, int group, const std::string& field) {
+  const std::string text = req.matches[group];
+  int value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) throw invalid(field, "'" + text + "' is not a tile coordinate");
+  return value;
+}
+
+// The lowest zoom whose pixels are as fine as the map's cells at `latitude`: past it, tiles only
+// magnify.
+int finest_zoom(double resolution_m, double latitude_deg) {
+  const double equator = 2 * M_PI * 6378137.0 * std::cos(latitude_deg * M_PI / 180) / kXyzTileSide;
+  return std::clamp(static_cast<int>(std::ceil(std::log2(equator / resolution_m))), 0, kXyzMaxZoom);
+}
+
+std::string hex_colour(const cv::Vec3b& bgr) {
+  char text[8];
+  std::snprintf(text, sizeof text, "#%02x%02x%02x", bgr[2], bgr[1], bgr[0]);
+  return text;
 }
 
 int page_size_of(const httplib::Request& req) {
@@ -147,8 +172,10 @@ HttpApi::HttpApi(ServiceContext& context, const HttpOptions& options) : context_
                                                     options.tls_client_ca.empty() ? nullptr : options.tls_client_ca.c_str());
     if (!tls->is_valid()) throw std::runtime_error("--http: cannot serve TLS with " + options.tls_cert + " and " + options.tls_key);
     server_ = std::move(tls);
+    tls_ = true;
   }
   add_routes();
+  add_tile_routes();
   port_ = options.port == 0 ? server_->bind_to_any_port(options.host)
                             : (server_->bind_to_port(options.host, options.port) ? options.port : -1);
   if (port_ <= 0)
@@ -161,31 +188,30 @@ HttpApi::~HttpApi() {
   if (thread_.joinable()) thread_.join();
 }
 
-void HttpApi::add_routes() {
-  using Body = std::function<void(const httplib::Request&, httplib::Response&, std::int64_t tenant)>;
+void HttpApi::route(const std::string& pattern, Body body) {
   // Every route: the caller's tenant first, refusals as JSON {"error": ...} with the status the
   // gRPC API would give in HTTP's words, and one log line with what was sent.
-  const auto route = [this](const std::string& pattern, Body body) {
-    server_->Get(pattern, [this, body](const httplib::Request& req, httplib::Response& res) {
-      // The library's range handling is off: send_product answers ranges (byte_range.h).
-      const_cast<httplib::Request&>(req).ranges.clear();
-      res.status = 200;
-      const grpc::Status status = status_of(("HTTP GET " + req.path).c_str(), [&] {
-        const std::string authorization = req.get_header_value("Authorization");
-        const std::int64_t tenant =
-            tenant_of_authorization(context_, req.has_header("Authorization") ? &authorization : nullptr);
-        body(req, res, tenant);
-      });
-      if (!status.ok()) {
-        if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) res.set_header("WWW-Authenticate", "Bearer");
-        res.content_provider_ = nullptr;
-        send_json(res, {{"error", status.error_message()}}, http_status(status.error_code()));
-      }
-      log("http %s %s %d %zu bytes", req.method.c_str(), req.path.c_str(), res.status,
-          res.content_provider_ ? res.content_length_ : res.body.size());
+  server_->Get(pattern, [this, body](const httplib::Request& req, httplib::Response& res) {
+    // The library's range handling is off: send_product answers ranges (byte_range.h).
+    const_cast<httplib::Request&>(req).ranges.clear();
+    res.status = 200;
+    const grpc::Status status = status_of(("HTTP GET " + req.path).c_str(), [&] {
+      const std::string authorization = req.get_header_value("Authorization");
+      const std::int64_t tenant =
+          tenant_of_authorization(context_, req.has_header("Authorization") ? &authorization : nullptr);
+      body(req, res, tenant);
     });
-  };
+    if (!status.ok()) {
+      if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) res.set_header("WWW-Authenticate", "Bearer");
+      res.content_provider_ = nullptr;
+      send_json(res, {{"error", status.error_message()}}, http_status(status.error_code()));
+    }
+    log("http %s %s %d %zu bytes", req.method.c_str(), req.path.c_str(), res.status,
+        res.content_provider_ ? res.content_length_ : res.body.size());
+  });
+}
 
+void HttpApi::add_routes() {
   route("/v1/surveys", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
     const int limit = page_size_of(req);
     const std::int64_t after = page_token(req.get_param_value("page_token"));
@@ -263,6 +289,58 @@ void HttpApi::add_routes() {
     if (res.status == 414) what = "the URI is too long (8 KiB at most)";
     send_json(res, {{"error", what}}, res.status);
   });
+}
+
+std::shared_ptr<const XyzTileSource> HttpApi::tile_source(const storage::JobRecord& job) {
+  return tiles_.source(job.id, [&] {
+    const auto grid = context_.results.map_grid(job.id);
+    auto cog = context_.results.tile(job.id, {"cog", 0, 0, 0});
+    if (!grid || grid->epsg <= 0 || !cog)
+      throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no map");
+    if (!cog) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no map");
+    return std::make_shared<const XyzTileSource>(std::move(*cog), "EPSG:" + std::to_string(grid->epsg));
+  });
+}
+
+void HttpApi::add_tile_routes() {
+  route(R"(/v1/jobs/([0-9]+)/tiles\.json)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    const std::shared_ptr<const XyzTileSource> source = tile_source(job);
+    const auto [west, south, east, north] = source->lon_lat_bounds();
+    const int finest = finest_zoom(source->resolution(), (south + north) / 2);
+    const std::string base = (tls_ ? "https://" : "http://") + req.get_header_value("Host");
+    const auto [lo, hi] = source->ramp_range();
+    json ramp = json::array();
+    for (const cv::Vec3b& colour : turbo_ramp()) ramp.push_back(hex_colour(colour));
+    send_json(res, {{"tilejson", "3.0.0"},
+                    {"name", "job " + std::to_string(job.id)},
+                    {"scheme", "xyz"},
+                    {"tiles", {base + "/v1/jobs/" + std::to_string(job.id) + "/tiles/{z}/{x}/{y}.png"}},
+                    {"minzoom", 0},
+                    {"maxzoom", std::min(kXyzMaxZoom, finest + 2)},
+                    {"bounds", {west, south, east, north}},
+                    {"center", {(west + east) / 2, (south + north) / 2, std::max(0, finest - 3)}},
+                    // How to read a tile's colours back (with ?shade=0): ramp[k] is the elevation
+                    // lo + (hi - lo) k / 255, clamped at both ends.
+                    {"bathyslam", {{"elevation_range_m", {lo, hi}}, {"ramp", ramp}, {"unshaded_query", "shade=0"}}}});
+  });
+  route(R"(/v1/jobs/([0-9]+)/tiles/(-?[0-9]+)/(-?[0-9]+)/(-?[0-9]+)\.png)",
+        [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+          const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+          const int z = coordinate_in_path(req, 2, "z"), x = coordinate_in_path(req, 3, "x"), y = coordinate_in_path(req, 4, "y");
+          try {
+            xyz_tile_bounds(z, x, y);
+          } catch (const std::invalid_argument& error) {
+            throw invalid("tile " + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y), error.what());
+          }
+          const bool shade = req.get_param_value("shade") != "0";
+          const std::shared_ptr<const std::string> png = tiles_.tile(job.id, z, x, y, shade, *tile_source(job));
+          if (!png)
+            throw Refusal(grpc::StatusCode::NOT_FOUND, "tile " + std::to_string(z) + "/" + std::to_string(x) + "/" +
+                                                           std::to_string(y) + " is outside job " + std::to_string(job.id) + "'s map");
+          res.set_header("Cache-Control", "private, max-age=86400");  // a job's map never changes
+          res.set_content(*png, "image/png");
+        });
 }
 
 }  // namespace bathyslam::server::http

@@ -6,17 +6,23 @@
 // another tenant's ids answer 404 as unknown ones do. Read only: uploads and jobs stay on gRPC.
 //
 // On cpp-httplib (Debian's libcpp-httplib-dev): a thread pool, TLS from the same PEM files as
-// gRPC, and a few hundred lines less than Boost.Beast for the same routes. Its own range
+// gRPC, and a few hundred lines less than Boost.Beast for the same routes. The map is also
+// served as XYZ tiles in Web Mercator (core/tiles/xyz_tiles.h) with a TileJSON document, for
+// web maps and QGIS. Its own range
 // handling is bypassed (byte_range.h): in Debian's 0.11.4 a range beyond the end is answered
 // with a negative length.
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
 
+#include "server/http/xyz_cache.h"
 #include "server/services/service_context.h"
 
 namespace httplib {
 class Server;
+struct Request;
+struct Response;
 }
 
 namespace bathyslam::server::http {
@@ -38,8 +44,15 @@ class HttpApi {
   int port() const { return port_; }
 
  private:
+  using Body = std::function<void(const httplib::Request&, httplib::Response&, std::int64_t tenant)>;
+  // A GET route whose body runs as the caller's tenant (route in http_api.cpp).
+  void route(const std::string& pattern, Body body);
   void add_routes();
+  void add_tile_routes();
+  std::shared_ptr<const XyzTileSource> tile_source(const storage::JobRecord& job);
   ServiceContext& context_;
+  bool tls_ = false;
+  XyzCache tiles_{256u << 20, 64u << 20};  // maps in memory, drawn tiles
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
   std::thread thread_;

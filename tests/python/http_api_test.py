@@ -10,12 +10,20 @@ import re
 import unittest
 import urllib.parse
 
-from osgeo import gdal
+import numpy
+from osgeo import gdal, osr
 
 from service_api_test import STUBS, Server, database_fingerprint, job_pb2, map_pb2, ready_survey, restart_asking_for_tokens
 from reliability_test import final_state
 
 gdal.UseExceptions()
+
+
+def srs(epsg):
+    ref = osr.SpatialReference()
+    ref.ImportFromEPSG(epsg)
+    ref.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+    return ref
 
 
 class HttpServer(Server):
@@ -171,6 +179,66 @@ class HttpApiTest(unittest.TestCase):
             status, _, body = self.get(f"/v1/jobs/{self.job}/corrected.gsf", headers={"Range": f"bytes={first}-{last}"})
             self.assertEqual((status, body), (206, gsf[first:last + 1]), (first, last))
 
+    def test_gdal_reads_the_xyz_tiles(self):
+        """GDAL's WMS driver reads the unshaded XYZ tiles over the map; turned back into elevation
+        through the TileJSON's ramp they agree with the COG warped to Web Mercator."""
+        status, _, body = self.get(f"/v1/jobs/{self.job}/tiles.json")
+        self.assertEqual(status, 200)
+        tilejson = json.loads(body)
+        west, south, east, north = tilejson["bounds"]
+        self.assertTrue(-180 < west < east < 180 and -85 < south < north < 85, tilejson["bounds"])
+        lo, hi = tilejson["bathyslam"]["elevation_range_m"]
+        ramp = numpy.array([[int(c[k:k + 2], 16) for k in (1, 3, 5)] for c in tilejson["bathyslam"]["ramp"]], float)
+        level = tilejson["maxzoom"] - 2  # pixels as fine as the map's cells
+        world = 20037508.342789244
+        url = tilejson["tiles"][0].replace("{z}", "${z}").replace("{x}", "${x}").replace("{y}", "${y}") + "?shade=0"
+        wms = (f"<GDAL_WMS><Service name='TMS'><ServerUrl>{url}</ServerUrl></Service><DataWindow>"
+               f"<UpperLeftX>{-world}</UpperLeftX><UpperLeftY>{world}</UpperLeftY><LowerRightX>{world}</LowerRightX>"
+               f"<LowerRightY>{-world}</LowerRightY><TileLevel>{level}</TileLevel><TileCountX>1</TileCountX>"
+               "<TileCountY>1</TileCountY><YOrigin>top</YOrigin></DataWindow><Projection>EPSG:3857</Projection>"
+               "<BlockSizeX>256</BlockSizeX><BlockSizeY>256</BlockSizeY><BandsCount>4</BandsCount>"
+               "<ZeroBlockHttpCodes>404</ZeroBlockHttpCodes><Cache/></GDAL_WMS>")
+        gdal.SetConfigOption("GDAL_HTTP_HEADERS", "Authorization: Bearer " + self.tokens["owner"])
+        try:
+            tiles = gdal.Open(wms)
+            pixel = 2 * world / tiles.RasterXSize
+            to_mercator = osr.CoordinateTransformation(srs(4326), srs(3857))
+            (x0, y1, _), (x1, y0, _) = (to_mercator.TransformPoint(west, south), to_mercator.TransformPoint(east, north))
+            col0, row0 = int((x0 + world) / pixel), int((world - y0) / pixel)
+            cols, rows = int((x1 + world) / pixel) + 1 - col0, int((world - y1) / pixel) + 1 - row0
+            rgba = tiles.ReadAsArray(col0, row0, cols, rows)
+        finally:
+            gdal.SetConfigOption("GDAL_HTTP_HEADERS", None)
+        local = os.path.join(STUBS, "xyz_grpc_map.tif")
+        with open(local, "wb") as f:
+            f.write(self.cog)
+        bounds = (-world + col0 * pixel, world - (row0 + rows) * pixel, -world + (col0 + cols) * pixel, world - row0 * pixel)
+        reference = gdal.Warp("/vsimem/xyz_reference.tif", local, dstSRS="EPSG:3857", outputBounds=bounds, width=cols,
+                              height=rows, resampleAlg="near")  # held: a band outlives no dataset
+        warped = reference.GetRasterBand(1).ReadAsArray()
+        rgb = rgba[:3].transpose(1, 2, 0).reshape(-1, 3).astype(float)
+        index = ((rgb[:, None, :] - ramp[None, :, :]) ** 2).sum(axis=2).argmin(axis=1).reshape(rows, cols)
+        from_tiles = numpy.where(rgba[3] > 0, lo + (hi - lo) * index / 255.0, numpy.nan)
+        both = numpy.isfinite(from_tiles) & numpy.isfinite(warped) & (warped >= lo) & (warped <= hi)
+        self.assertGreater(both.sum(), 1000)
+        agree = numpy.abs(from_tiles[both] - warped[both]) <= 1.5 * (hi - lo) / 255
+        self.assertGreater(agree.mean(), 0.95, f"{agree.mean():.3f} of {both.sum()} pixels within the ramp's step")
+        covered = numpy.isfinite(from_tiles) == numpy.isfinite(warped)
+        self.assertGreater(covered.mean(), 0.97, "where the tiles have data and the COG has")
+        print(f"XYZ level {level}: {both.sum()} pixels, {agree.mean():.4f} within 1.5 ramp steps ({(hi - lo) / 255:.3f} m)")
+
+    def test_tile_coordinates(self):
+        for path, code, words in ((f"/v1/jobs/{self.job}/tiles/40/0/0.png", 400, "z must be within"),
+                                  (f"/v1/jobs/{self.job}/tiles/3/-1/0.png", 400, "x and y must be within"),
+                                  (f"/v1/jobs/{self.job}/tiles/3/8/0.png", 400, "x and y must be within"),
+                                  (f"/v1/jobs/{self.job}/tiles/12/0/0.png", 404, "outside job"),
+                                  (f"/v1/jobs/{self.job}/tiles/99999999999/0/0.png", 400, "not a tile coordinate")):
+            status, _, body = self.get(path)
+            self.assertEqual(status, code, path)
+            self.assertIn(words, json.loads(body)["error"], path)
+        status, headers, body = self.get(f"/v1/jobs/{self.job}/tiles/0/0/0.png")
+        self.assertEqual((status, headers["Content-Type"], body[:4]), (200, "image/png", b"\x89PNG"))
+
     def test_malformed_paths(self):
         for path, code in ((f"/v1/jobs/{self.job}/../../../etc/passwd", 404), ("/v1/jobs/0", 400),
                            ("/v1/jobs/99999999999999999999999/map.tif", 400), ("/v1/jobs/x/map.tif", 404),
@@ -184,7 +252,8 @@ class HttpApiTest(unittest.TestCase):
     def test_every_route_and_caller(self):
         routes = ["/v1/surveys", "/v1/jobs", f"/v1/jobs?survey_id={self.survey}", f"/v1/jobs/{self.job}",
                   f"/v1/jobs/{self.job}/report.json", f"/v1/jobs/{self.job}/plots/trajectory.png",
-                  f"/v1/jobs/{self.job}/map.tif", f"/v1/jobs/{self.job}/map.bag"]
+                  f"/v1/jobs/{self.job}/map.tif", f"/v1/jobs/{self.job}/map.bag", f"/v1/jobs/{self.job}/tiles.json",
+                  f"/v1/jobs/{self.job}/tiles/0/0/0.png"]
         for route in routes:
             before = database_fingerprint(self.server.url)
             for who in ("no token", "wrong token", "revoked token"):
