@@ -239,7 +239,7 @@ int serve(const ServeOptions& o) {
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::unique_ptr<bathyslam::server::http::HttpApi> http;
-  if (!o.http.empty()) http = std::make_unique<bathyslam::server::http::HttpApi>(context, http_options(o));
+  if (!o.http.empty()) http = std::make_unique<bathyslam::server::http::HttpApi>(context, job_event_bell, http_options(o));
   std::thread stopper([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 
 #include <cpl_vsi.h>
@@ -38,6 +39,18 @@ std::vector<float> read_elevation(GDALDataset& ds, int col, int row, int cols, i
   const double no_data = band->GetNoDataValue(&has_no_data);
   if (has_no_data && !std::isnan(no_data)) std::replace(values.begin(), values.end(), static_cast<float>(no_data), NAN);
   return values;
+}
+
+// This thread's projection of WGS 84 into `crs`: creating one takes PROJ milliseconds and
+// memory, using one microseconds, and one may not be shared between threads.
+const GeographicProjection& projection_to(const std::string& crs) {
+  thread_local std::string held_crs;
+  thread_local std::unique_ptr<GeographicProjection> held;
+  if (!held || held_crs != crs) {
+    held = std::make_unique<GeographicProjection>(crs);
+    held_crs = crs;
+  }
+  return *held;
 }
 
 }  // namespace
@@ -90,7 +103,52 @@ XyzTileSource::XyzTileSource(std::vector<std::uint8_t> cog, std::string crs) : c
   }
 }
 
-XyzTileSource::~XyzTileSource() { VSIUnlink(path_.c_str()); }
+XyzTileSource::~XyzTileSource() {
+  idle_.clear();  // closed before their file goes
+  VSIUnlink(path_.c_str());
+}
+
+void XyzTileSource::Closer::operator()(GDALDataset* ds) const { GDALClose(GDALDataset::ToHandle(ds)); }
+
+// A handle of the COG lent for one read, returned (or closed, when it failed) at its end.
+class XyzTileSource::Reader {
+ public:
+  explicit Reader(const XyzTileSource& source) : source_(source) {
+    std::unique_lock lock(source_.mutex_);
+    source_.returned_.wait(lock, [&] { return source_.lent_ < kReaders; });
+    ++source_.lent_;
+    if (!source_.idle_.empty()) {
+      handle_ = std::move(source_.idle_.back());
+      source_.idle_.pop_back();
+    }
+    lock.unlock();
+    try {
+      if (!handle_) handle_ = Handle(open_cog(source_.path_).release());
+    } catch (...) {
+      give_back();
+      throw;
+    }
+  }
+  ~Reader() {
+    if (std::uncaught_exceptions() > 0) handle_.reset();  // a failed read's handle is not reused
+    give_back();
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+  GDALDataset& operator*() const { return *handle_; }
+
+ private:
+  void give_back() {
+    {
+      const std::lock_guard lock(source_.mutex_);
+      --source_.lent_;
+      if (handle_) source_.idle_.push_back(std::move(handle_));
+    }
+    source_.returned_.notify_one();
+  }
+  const XyzTileSource& source_;
+  Handle handle_;
+};
 
 std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, int y, bool shade) const {
   const auto [west, south, east, north] = xyz_tile_bounds(z, x, y);
@@ -99,7 +157,7 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
   if (east_lon < bounds_[0] || west_lon > bounds_[2] || north_lat < bounds_[1] || south_lat > bounds_[3]) return std::nullopt;
 
   // Where the tile's lattice points fall in the map's CRS, and the map window they span.
-  const GeographicProjection projection(crs_);
+  const GeographicProjection& projection = projection_to(crs_);
   std::vector<GeographicProjection::EastNorth> lattice;
   double e_min = INFINITY, e_max = -INFINITY, n_min = INFINITY, n_max = -INFINITY;
   for (int b = 0; b <= kLattice; ++b) {
@@ -121,8 +179,10 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
   const double shrink = std::max(1.0, (e_max - e_min) / kXyzTileSide / resolution_);
   const int width = std::max(1, static_cast<int>(std::ceil(cols / shrink)));
   const int height = std::max(1, static_cast<int>(std::ceil(rows / shrink)));
-  GdalDatasetPtr ds = open_cog(path_);  // a handle of this call's own: GDAL's are not thread-safe
-  const std::vector<float> elevation = read_elevation(*ds, col0, row0, cols, rows, width, height);
+  const std::vector<float> elevation = [&] {
+    const Reader reader(*this);
+    return read_elevation(*reader, col0, row0, cols, rows, width, height);
+  }();
   const double step_e = cols * resolution_ / width, step_n = rows * resolution_ / height;
   const double e0 = transform_[0] + col0 * resolution_, n0 = transform_[3] - row0 * resolution_;
   const auto at = [&](int bx, int by) {

@@ -4,10 +4,15 @@
 // COG at the zoom's resolution (GDAL picks the COG's overview), its elevation on the report's
 // ramp and hillshade (relief_colours.h), transparent where the map has no data.
 #include <array>
+#include <condition_variable>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
+
+class GDALDataset;
 
 namespace bathyslam {
 
@@ -26,7 +31,7 @@ class XyzTileSource {
   // ("EPSG:<code>"). The colour ramp spans the map's 1 % to 99 % elevation, the same in every
   // tile. Throws std::runtime_error when GDAL cannot read them or PROJ cannot place the CRS.
   XyzTileSource(std::vector<std::uint8_t> cog, std::string crs);
-  ~XyzTileSource();
+  ~XyzTileSource();  // after every tile_png call has returned
   XyzTileSource(const XyzTileSource&) = delete;
   XyzTileSource& operator=(const XyzTileSource&) = delete;
 
@@ -43,6 +48,20 @@ class XyzTileSource {
   std::size_t bytes() const { return size_; }
 
  private:
+  struct Closer {
+    void operator()(GDALDataset* ds) const;
+  };
+  using Handle = std::unique_ptr<GDALDataset, Closer>;
+  // At most kReaders handles of the COG are open (GDAL's are not thread-safe, and each holds
+  // its decompressed blocks and ZSTD buffers: eight concurrent readers peaked at 300 MB on
+  // `lake`); a call waits for one, and a handle kept open keeps its blocks for the next tile.
+  class Reader;
+  static constexpr int kReaders = 2;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable returned_;
+  mutable std::vector<Handle> idle_;
+  mutable int lent_ = 0;
+
   std::string path_;  // the COG in GDAL's /vsimem/
   std::string crs_;
   std::size_t size_ = 0;

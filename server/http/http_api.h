@@ -11,13 +11,16 @@
 // web maps and QGIS. Its own range
 // handling is bypassed (byte_range.h): in Debian's 0.11.4 a range beyond the end is answered
 // with a negative length.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
 #include <thread>
 
 #include "server/http/xyz_cache.h"
+#include "server/services/job_event_bell.h"
 #include "server/services/service_context.h"
+#include "server/services/stream_slots.h"
 
 namespace httplib {
 class Server;
@@ -37,7 +40,8 @@ class HttpApi {
  public:
   // Binds the port (throws std::runtime_error naming the address when it cannot) and serves on
   // a thread of its own until destroyed.
-  HttpApi(ServiceContext& context, const HttpOptions& options);
+  // `bell` wakes the job event streams (GET /v1/jobs/{id}/events) as it wakes WatchJob.
+  HttpApi(ServiceContext& context, JobEventBell& bell, const HttpOptions& options);
   ~HttpApi();
   HttpApi(const HttpApi&) = delete;
   HttpApi& operator=(const HttpApi&) = delete;
@@ -49,9 +53,15 @@ class HttpApi {
   void route(const std::string& pattern, Body body);
   void add_routes();
   void add_tile_routes();
+  void add_event_routes();
   std::shared_ptr<const XyzTileSource> tile_source(const storage::JobRecord& job);
   ServiceContext& context_;
+  JobEventBell& bell_;
   bool tls_ = false;
+  // Each open event stream holds one of the library's threads: a tenant may hold a few, and all
+  // of them together leave threads for every other request (kThreads in http_api.cpp).
+  StreamSlots event_slots_{8};
+  std::atomic<int> event_streams_{0};
   XyzCache tiles_{256u << 20, 64u << 20};  // maps in memory, drawn tiles
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;

@@ -155,9 +155,14 @@ class HttpApiTest(unittest.TestCase):
         self.assertEqual([s["id"] for s in json.loads(body)["surveys"]], [self.survey])
         status, _, body = self.get("/v1/jobs")
         jobs = json.loads(body)["jobs"]
-        self.assertEqual([(j["id"], j["state"], j["configuration"]) for j in jobs], [(self.job, "succeeded", "mchs")])
+        self.assertIn((self.job, "succeeded", "mchs"), [(j["id"], j["state"], j["configuration"]) for j in jobs])
+        self.assertEqual([j["id"] for j in jobs], sorted((j["id"] for j in jobs), reverse=True), "newest first")
         status, _, body = self.get(f"/v1/jobs?survey_id={self.survey}&page_size=1")
-        self.assertEqual([j["id"] for j in json.loads(body)["jobs"]], [self.job])
+        page = json.loads(body)
+        self.assertEqual([j["id"] for j in page["jobs"]], [jobs[0]["id"]])
+        if len(jobs) > 1:  # another test's job too: the next page starts after this one
+            status, _, body = self.get(f"/v1/jobs?survey_id={self.survey}&page_size=1&page_token={page['next_page_token']}")
+            self.assertEqual([j["id"] for j in json.loads(body)["jobs"]], [jobs[1]["id"]])
         status, _, body = self.get(f"/v1/jobs/{self.job}/report.json")
         self.assertEqual(status, 200)
         report = json.loads(body)
@@ -239,6 +244,45 @@ class HttpApiTest(unittest.TestCase):
         status, headers, body = self.get(f"/v1/jobs/{self.job}/tiles/0/0/0.png")
         self.assertEqual((status, headers["Content-Type"], body[:4]), (200, "image/png", b"\x89PNG"))
 
+    def events(self, job, last_event_id=None):
+        """The job's server-sent events until the stream ends: [(id, name, data)]."""
+        url = urllib.parse.urlsplit(self.server.http)
+        connection = http.client.HTTPConnection(url.hostname, url.port, timeout=120)
+        headers = {"Authorization": "Bearer " + self.tokens["owner"]}
+        if last_event_id is not None:
+            headers["Last-Event-ID"] = str(last_event_id)
+        connection.request("GET", f"/v1/jobs/{job}/events", headers=headers)
+        response = connection.getresponse()
+        self.assertEqual((response.status, response.headers["Content-Type"]), (200, "text/event-stream"))
+        events, fields = [], {}
+        for raw in response:
+            line = raw.decode().rstrip("\n")
+            if line == "" and fields:
+                events.append((int(fields.get("id", 0)), fields["event"], json.loads(fields["data"])))
+                fields = {}
+            elif line and not line.startswith(":"):
+                key, _, value = line.partition(": ")
+                fields[key] = value
+        connection.close()
+        return events
+
+    def test_job_progress_as_server_sent_events(self):
+        owner = [("authorization", "Bearer " + self.tokens["owner"])]
+        job = self.server.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=self.survey, configuration="odometry"),
+                                         timeout=30, metadata=owner).id
+        events = self.events(job)
+        progress = [e for e in events if e[1] == "progress"]
+        self.assertGreater(len(progress), 3)
+        self.assertEqual([e[0] for e in progress], sorted({e[0] for e in progress}), "ids rise, none twice")
+        self.assertEqual(events[-1][1], "end")
+        self.assertEqual((events[-1][2]["id"], events[-1][2]["state"]), (job, "succeeded"))
+        self.assertIn("store", {e[2]["stage"] for e in progress})
+        # Resumed after an event: exactly the ones after it, then the end again.
+        middle = progress[len(progress) // 2][0]
+        again = self.events(job, last_event_id=middle)
+        self.assertEqual([e[0] for e in again if e[1] == "progress"], [e[0] for e in progress if e[0] > middle])
+        self.assertEqual(again[-1][1], "end")
+
     def test_malformed_paths(self):
         for path, code in ((f"/v1/jobs/{self.job}/../../../etc/passwd", 404), ("/v1/jobs/0", 400),
                            ("/v1/jobs/99999999999999999999999/map.tif", 400), ("/v1/jobs/x/map.tif", 404),
@@ -253,7 +297,7 @@ class HttpApiTest(unittest.TestCase):
         routes = ["/v1/surveys", "/v1/jobs", f"/v1/jobs?survey_id={self.survey}", f"/v1/jobs/{self.job}",
                   f"/v1/jobs/{self.job}/report.json", f"/v1/jobs/{self.job}/plots/trajectory.png",
                   f"/v1/jobs/{self.job}/map.tif", f"/v1/jobs/{self.job}/map.bag", f"/v1/jobs/{self.job}/tiles.json",
-                  f"/v1/jobs/{self.job}/tiles/0/0/0.png"]
+                  f"/v1/jobs/{self.job}/tiles/0/0/0.png", f"/v1/jobs/{self.job}/events"]
         for route in routes:
             before = database_fingerprint(self.server.url)
             for who in ("no token", "wrong token", "revoked token"):
