@@ -13,8 +13,9 @@ import urllib.parse
 import numpy
 from osgeo import gdal, osr
 
-from service_api_test import STUBS, Server, database_fingerprint, job_pb2, map_pb2, ready_survey, restart_asking_for_tokens
-from reliability_test import final_state
+from service_api_test import STUBS, Server, database_fingerprint, job_pb2, map_pb2, restart_asking_for_tokens
+
+import bathyslam  # noqa: E402  (the Python client, on the path service_api_test puts)
 
 gdal.UseExceptions()
 
@@ -47,11 +48,12 @@ class HttpApiTest(unittest.TestCase):
         # asking every caller for a token (as isolation_test.py does).
         cls.server = HttpServer(dev_tenant="owner")
         s = cls.server
-        cls.survey = ready_survey(s.surveys, "ready")
-        job = s.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=cls.survey, configuration="mchs"), timeout=30)
-        assert final_state(s, job.id).state == job_pb2.SUCCEEDED, s.server_log()
-        cls.job = job.id
-        cls.cog = b"".join(c.data for c in s.maps.GetMap(map_pb2.GetMapRequest(job_id=job.id, format=map_pb2.COG), timeout=60))
+        with bathyslam.Client(s.address) as client:  # the Python client
+            cls.survey = client.upload(os.environ["SMALL_BUNDLE"])
+            cls.job = client.submit(cls.survey, "mchs")
+            client.watch(cls.job)
+            with open(client.download_map(cls.job, os.path.join(STUBS, "grpc_map.tif")), "rb") as f:
+                cls.cog = f.read()
         cls.tokens = restart_asking_for_tokens(s)
 
     @classmethod
@@ -85,10 +87,7 @@ class HttpApiTest(unittest.TestCase):
         for key, value in options.items():
             gdal.SetConfigOption(key, value)
         try:
-            local = os.path.join(STUBS, "grpc_map.tif")
-            with open(local, "wb") as f:
-                f.write(self.cog)
-            mine = gdal.Open(local)
+            mine = gdal.Open(os.path.join(STUBS, "grpc_map.tif"))
             before = self.served(path)
             remote = gdal.Open("/vsicurl/" + self.server.http + path)
             info = gdal.Info(remote, format="json")
@@ -214,9 +213,7 @@ class HttpApiTest(unittest.TestCase):
             rgba = tiles.ReadAsArray(col0, row0, cols, rows)
         finally:
             gdal.SetConfigOption("GDAL_HTTP_HEADERS", None)
-        local = os.path.join(STUBS, "xyz_grpc_map.tif")
-        with open(local, "wb") as f:
-            f.write(self.cog)
+        local = os.path.join(STUBS, "grpc_map.tif")
         bounds = (-world + col0 * pixel, world - (row0 + rows) * pixel, -world + (col0 + cols) * pixel, world - row0 * pixel)
         reference = gdal.Warp("/vsimem/xyz_reference.tif", local, dstSRS="EPSG:3857", outputBounds=bounds, width=cols,
                               height=rows, resampleAlg="near")  # held: a band outlives no dataset

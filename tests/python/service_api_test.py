@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The bathyslam API from another language: Debian's python3-grpcio against a real
 bathyslam-server and a real PostgreSQL (the ctest `pg` cluster), stubs generated from the
-same protos with grpc_python_plugin. Environment (set by ctest): BATHYSLAM_SERVER_BIN,
-BATHYSLAM_TEST_PG, PG_SH, PROTO_DIR, SMALL_BUNDLE (a simulated `small` bundle)."""
+same protos with grpc_python_plugin (the Python client's, build/python). Environment (set by
+ctest): BATHYSLAM_SERVER_BIN, BATHYSLAM_TEST_PG, PG_SH, PROTO_DIR, SMALL_BUNDLE (a simulated
+`small` bundle), BATHYSLAM_PYTHONPATH (build/python)."""
 import atexit
 import hashlib
 import os
@@ -23,11 +24,12 @@ STUBS = tempfile.mkdtemp(prefix="bathyslam-py-")
 # The stubs, the servers' logs and their scratch folders go when the tests end: a server a test
 # kills cannot remove its own scratch (a job's copy of its survey, tens of megabytes).
 atexit.register(shutil.rmtree, STUBS, ignore_errors=True)
-subprocess.run(["protoc", "-I", ENV["PROTO_DIR"], "-I", HERE, "--python_out", STUBS, "--grpc_python_out", STUBS,
-                "--plugin=protoc-gen-grpc_python=/usr/bin/grpc_python_plugin",
-                "bathyslam/v1/common.proto", "bathyslam/v1/survey.proto", "bathyslam/v1/job.proto",
-                "bathyslam/v1/map.proto", "health.proto"], check=True)
+# The API's stubs are the Python client's (build/python: client/python/bathyslam and the stubs
+# the build generates); health checking's are generated here.
+subprocess.run(["protoc", "-I", HERE, "--python_out", STUBS, "--grpc_python_out", STUBS,
+                "--plugin=protoc-gen-grpc_python=/usr/bin/grpc_python_plugin", "health.proto"], check=True)
 sys.path.insert(0, STUBS)
+sys.path.insert(0, ENV["BATHYSLAM_PYTHONPATH"])
 from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc  # noqa: E402
 import health_pb2, health_pb2_grpc  # noqa: E402
 

@@ -1,0 +1,204 @@
+"""Client: the bathyslam API as a few calls, with the CLI's semantics (client/upload_command.cpp,
+client/job_commands.cpp): an upload finds the survey an interrupted one left and sends each file
+from what the server has committed; UNAVAILABLE answers are waited out during an upload."""
+import hashlib
+import json
+import os
+import time
+
+import grpc
+
+from bathyslam.errors import JobFailed, Unavailable, error_of
+from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc
+
+CHUNK = 1 << 20  # the API's largest chunk
+BUNDLE_FILES = ("survey.json", "nav.csv", "pings.csv", "reference_nav.csv")
+SONAR_EXTENSIONS = (".gsf", ".all", ".xtf")
+FORMATS = {"cog": map_pb2.COG, "bag": map_pb2.BAG, "gsf": map_pb2.GSF}
+FINISHED = {job_pb2.SUCCEEDED: "succeeded", job_pb2.FAILED: "failed", job_pb2.CANCELLED: "cancelled"}
+
+
+def _job(job):
+    """A Job message as a dict, its state as the HTTP API and the CLI name it."""
+    return {"id": job.id, "survey_id": job.survey_id, "configuration": job.configuration,
+            "state": job_pb2.JobState.Name(job.state).lower(), "stage": job.stage, "progress": job.progress,
+            "attempts": job.attempts, "error": job.error, "created_at": job.created_at, "started_at": job.started_at,
+            "finished_at": job.finished_at, "parameters": dict(job.parameters)}
+
+
+def _sha256(path):
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(4 << 20), b""):
+            digest.update(block)
+    return digest.digest()
+
+
+class Client:
+    """A connection to bathyslam-server. `token`: an API token (`bathyslam-server token create`);
+    None on a development server. `root_certificates`: PEM bytes of the CA of a TLS server."""
+
+    def __init__(self, server="127.0.0.1:50051", token=None, *, root_certificates=None, timeout=60,
+                 retry_seconds=300):
+        options = [("grpc.max_receive_message_length", 64 << 20)]
+        self._channel = (grpc.secure_channel(server, grpc.ssl_channel_credentials(root_certificates), options)
+                         if root_certificates else grpc.insecure_channel(server, options))
+        self._metadata = [("authorization", "Bearer " + token)] if token else []
+        self._timeout, self._retry_seconds = timeout, retry_seconds
+        self._surveys = survey_pb2_grpc.SurveyServiceStub(self._channel)
+        self._jobs = job_pb2_grpc.JobServiceStub(self._channel)
+        self._maps = map_pb2_grpc.MapServiceStub(self._channel)
+
+    def close(self):
+        self._channel.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _call(self, name, method, request, timeout=None):
+        try:
+            return method(request, timeout=timeout or self._timeout, metadata=self._metadata)
+        except grpc.RpcError as error:
+            raise error_of(name, error) from None
+
+    def _retrying(self, step):
+        """`step()`, again after a growing pause while the server answers UNAVAILABLE."""
+        give_up, pause = time.monotonic() + self._retry_seconds, 1.0
+        while True:
+            try:
+                return step()
+            except Unavailable:
+                if time.monotonic() + pause > give_up:
+                    raise
+                time.sleep(pause)
+                pause = min(2 * pause, 15.0)
+
+    # Surveys
+
+    def upload(self, *paths, name=None, crs="", reference_nav=None, progress=None):
+        """Uploads a survey bundle folder, or sonar files (.gsf, .all or .xtf, one format), and
+        finalizes it; returns its id. Run again after an interruption (even a killed process), it
+        resumes: the survey of the same name is found and each file continues from what the
+        server has committed. `progress(file_name, sent_bytes, size_bytes)` after each chunk."""
+        files, declared = self._local_files(paths, name, crs, reference_nav)
+        found = self._retrying(lambda: self._call("ListSurveys", self._surveys.ListSurveys,
+                                                  survey_pb2.ListSurveysRequest(name=declared["name"])))
+        if found.surveys:
+            survey = found.surveys[0]
+            if survey.state == survey_pb2.Survey.READY:
+                return survey.id
+            survey_id = survey.id
+        else:
+            survey_id = self._call("CreateSurvey", self._surveys.CreateSurvey, survey_pb2.CreateSurveyRequest(
+                name=declared["name"], crs=declared["crs"], sonar_json=json.dumps(declared["sonar"]),
+                vehicle_json=json.dumps(declared["vehicle"]))).id
+        for file_name, path in files:
+            self._retrying(lambda: self._upload_file(survey_id, file_name, path, progress))
+        self._retrying(lambda: self._call("FinalizeSurvey", self._surveys.FinalizeSurvey,
+                                          survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=600))
+        return survey_id
+
+    @staticmethod
+    def _local_files(paths, name, crs, reference_nav):
+        """[(name on the server, local path)] and the survey's declaration, as the CLI makes them."""
+        if len(paths) == 1 and os.path.isdir(paths[0]):
+            folder = paths[0]
+            with open(os.path.join(folder, "survey.json"), encoding="utf-8") as f:
+                meta = json.load(f)
+            declared = {"name": name or meta.get("name") or os.path.basename(os.path.normpath(folder)),
+                        "crs": meta.get("crs", ""), "sonar": meta.get("sonar", {}), "vehicle": meta.get("vehicle", {})}
+            return [(f, os.path.join(folder, f)) for f in BUNDLE_FILES if os.path.isfile(os.path.join(folder, f))], declared
+        extension = os.path.splitext(paths[0])[1].lower() if paths else ""
+        if extension not in SONAR_EXTENSIONS or any(os.path.splitext(p)[1].lower() != extension for p in paths):
+            raise ValueError("upload: one bundle folder, or sonar files of one format (.gsf, .all or .xtf)")
+        files = [(os.path.basename(p), p) for p in paths]
+        if reference_nav:
+            files.append(("reference_nav.csv", reference_nav))
+        return files, {"name": name or os.path.splitext(os.path.basename(paths[0]))[0], "crs": crs, "sonar": {},
+                       "vehicle": {}}
+
+    def _upload_file(self, survey_id, file_name, path, progress):
+        size, digest = os.path.getsize(path), _sha256(path)
+        offset = 0
+        try:
+            status = self._call("GetUploadStatus", self._surveys.GetUploadStatus,
+                                survey_pb2.GetUploadStatusRequest(survey_id=survey_id, file_name=file_name))
+            if status.size_bytes == size and status.sha256 == digest:
+                if status.complete:
+                    return
+                offset = status.committed_bytes
+        except Exception as error:  # NotFound: not begun yet
+            if getattr(error, "code", None) != grpc.StatusCode.NOT_FOUND:
+                raise
+
+        def requests():
+            with open(path, "rb") as f:
+                f.seek(offset)
+                sent, first = offset, True
+                while first or sent < size:
+                    data = f.read(CHUNK)
+                    message = survey_pb2.UploadFileRequest(offset=sent, data=data)
+                    if first:
+                        message.survey_id, message.file_name = survey_id, file_name
+                        message.size_bytes, message.sha256 = size, digest
+                    yield message
+                    sent += len(data)
+                    first = False
+                    if progress:
+                        progress(file_name, sent, size)
+
+        reply = self._call("UploadFile " + file_name, self._surveys.UploadFile, requests(), timeout=24 * 3600)
+        if not reply.complete:
+            raise Unavailable("UploadFile " + file_name, grpc.StatusCode.UNAVAILABLE,
+                              f"stopped at {reply.committed_bytes} of {size} bytes")
+
+    # Jobs
+
+    def submit(self, survey_id, config="mchs", parameters=None):
+        """Queues a SLAM job (odometry, gicp or mchs; `parameters` overrides by name); its id."""
+        request = job_pb2.SubmitJobRequest(survey_id=survey_id, configuration=config,
+                                           parameters={k: str(v) for k, v in (parameters or {}).items()})
+        return self._call("SubmitJob", self._jobs.SubmitJob, request).id
+
+    def job(self, job_id):
+        return _job(self._call("GetJob", self._jobs.GetJob, job_pb2.GetJobRequest(job_id=job_id)))
+
+    def watch(self, job_id, progress=None, timeout=24 * 3600):
+        """Waits for the job to end, calling `progress(stage, fraction, message)` for each event;
+        returns the job (a dict) when it succeeded, raises JobFailed when it failed or was cancelled."""
+        try:
+            for event in self._jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job_id), timeout=timeout,
+                                             metadata=self._metadata):
+                if progress:
+                    progress(event.stage, event.progress, event.message)
+                if event.state in FINISHED:
+                    break
+        except grpc.RpcError as error:
+            raise error_of("WatchJob", error) from None
+        job = self.job(job_id)
+        if job["state"] != "succeeded":
+            raise JobFailed(job)
+        return job
+
+    def report(self, job_id):
+        """The job's quality report as `bathyslam report --out` saves report.json (a dict)."""
+        reply = self._call("GetReport", self._jobs.GetReport, job_pb2.GetReportRequest(job_id=job_id))
+        return json.loads(reply.report_json)
+
+    def download_map(self, job_id, path, format="cog"):
+        """Writes the job's map to `path`: "cog" (GeoTIFF), "bag" or "gsf" (the pings with the
+        corrected navigation); written to a temporary name first, so `path` is whole or absent."""
+        partial = path + ".part"
+        try:
+            with open(partial, "wb") as out:
+                for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format]),
+                                               timeout=3600, metadata=self._metadata):
+                    out.write(chunk.data)
+        except grpc.RpcError as error:
+            os.remove(partial)
+            raise error_of("GetMap", error) from None
+        os.replace(partial, path)
+        return path
