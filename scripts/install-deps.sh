@@ -13,6 +13,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libssl-dev zlib1g-dev libzstd-dev libtbb-dev
   openssl  # service_tls makes its certificates at test time
   libcpp-httplib-dev  # the HTTP endpoint (server/http)
+  chromium python3-websocket  # the web page's test drives headless Chromium over DevTools
   clang libclang-rt-14-dev  # libFuzzer (scripts/fuzz-*.sh)
   python3 python3-grpcio python3-protobuf python3-gdal python3-openvdb python3-numpy
   python3-imath  # ships the PyImath library that Imath's CMake targets (via OpenVDB) reference

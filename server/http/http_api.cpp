@@ -11,9 +11,11 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "core/io/crs.h"
 #include "core/products/corrected_gsf.h"
 #include "core/tiles/relief_colours.h"
 #include "server/http/byte_range.h"
+#include "server/http/web_files.h"
 #include "server/log.h"
 
 namespace bathyslam::server::http {
@@ -272,6 +274,11 @@ void HttpApi::add_routes() {
           const storage::Bytes& png = report->plots.at(name);
           res.set_content(std::string(png.begin(), png.end()), "image/png");
         });
+  route(R"(/v1/jobs/([0-9]+)/trajectory\.geojson)",
+        [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+          const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+          send_json(res, trajectory_geojson(job));
+        });
   route(R"(/v1/jobs/([0-9]+)/map\.tif)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
     const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
     send_product(req, res, stored_map(context_, job, "cog", "image/tiff; application=geotiff; profile=cloud-optimized"));
@@ -289,6 +296,18 @@ void HttpApi::add_routes() {
                   [this, id = job.id](std::int64_t offset, std::int64_t length) {
                     return context_.results.file_bytes(id, kCorrectedGsfFile, offset, length);
                   }});
+  });
+  // The page and its files (web_files.h): public, as any page is; what it shows asks for the token.
+  const auto serve_file = [](const std::string& name, httplib::Response& res) {
+    const auto file = web_files().find(name);
+    if (file == web_files().end()) return;
+    res.status = 200;
+    res.set_header("Cache-Control", "no-cache");  // a new server build brings a new page
+    res.set_content(std::string(file->second.bytes), std::string(file->second.content_type));
+  };
+  server_->Get("/", [serve_file](const httplib::Request&, httplib::Response& res) { serve_file("/index.html", res); });
+  server_->Get(R"(/static/([A-Za-z0-9_./-]+))", [serve_file](const httplib::Request& req, httplib::Response& res) {
+    serve_file("/" + std::string(req.matches[1]), res);  // a name not in the map (.., //) is 404
   });
   // Any other path, and the library's own refusals (a malformed Range: 416), say so in JSON too.
   server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
@@ -417,6 +436,42 @@ void HttpApi::add_event_routes() {
           }
         });
   });
+}
+
+json HttpApi::trajectory_geojson(const storage::JobRecord& job) {
+  const std::vector<storage::SubmapPose> submaps = context_.results.submap_poses(job.id);
+  const std::vector<Eigen::Isometry3d> corrected = context_.results.load_optimized_poses(job.id);
+  const auto grid = context_.results.map_grid(job.id);
+  const auto origin = context_.results.origin(job.id);
+  if (submaps.empty() || corrected.size() != submaps.size() || !grid || grid->epsg <= 0 || !origin)
+    throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " is " + storage::to_string(job.state) +
+                                                   " and has no trajectory");
+  const GeographicProjection projection("EPSG:" + std::to_string(grid->epsg));
+  const auto lon_lat = [&](const Eigen::Isometry3d& pose) {
+    const auto p = projection.inverse(pose.translation().x() + origin->easting, pose.translation().y() + origin->northing);
+    return json::array({p.longitude_deg, p.latitude_deg});
+  };
+  const auto line = [](const std::string& kind, json coordinates, json properties = json::object()) {
+    properties["kind"] = kind;
+    return json{{"type", "Feature"},
+                {"properties", properties},
+                {"geometry", {{"type", "LineString"}, {"coordinates", std::move(coordinates)}}}};
+  };
+  json dead_reckoning = json::array(), solved = json::array(), features = json::array();
+  for (std::size_t i = 0; i < submaps.size(); ++i) {
+    dead_reckoning.push_back(lon_lat(submaps[i].dr_pose));
+    solved.push_back(lon_lat(corrected[i]));
+  }
+  features.push_back(line("dead_reckoning", std::move(dead_reckoning)));
+  features.push_back(line("corrected", std::move(solved)));
+  // The loop closures the published map was made with, between the submaps' corrected poses.
+  for (const Constraint& c : context_.results.load_constraints(job.id)) {
+    if (c.type != ConstraintType::kLoop || !c.in_graph()) continue;
+    if (c.from < 0 || c.to < 0 || static_cast<std::size_t>(std::max(c.from, c.to)) >= corrected.size()) continue;
+    features.push_back(line("loop_closure", json::array({lon_lat(corrected[c.from]), lon_lat(corrected[c.to])}),
+                            {{"from", c.from}, {"to", c.to}}));
+  }
+  return {{"type", "FeatureCollection"}, {"features", std::move(features)}};
 }
 
 }  // namespace bathyslam::server::http

@@ -17,6 +17,8 @@
 #include <string>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "server/http/xyz_cache.h"
 #include "server/services/job_event_bell.h"
 #include "server/services/service_context.h"
@@ -55,6 +57,8 @@ class HttpApi {
   void add_tile_routes();
   void add_event_routes();
   std::shared_ptr<const XyzTileSource> tile_source(const storage::JobRecord& job);
+  // The dead-reckoning and corrected submap tracks and the accepted loop closures, in WGS 84.
+  nlohmann::json trajectory_geojson(const storage::JobRecord& job);
   ServiceContext& context_;
   JobEventBell& bell_;
   bool tls_ = false;
