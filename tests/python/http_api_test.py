@@ -175,6 +175,11 @@ class HttpApiTest(unittest.TestCase):
         self.assertGreater(len(reply.plots), 0)
         status, _, body = self.get(f"/v1/jobs/{self.job}/map.bag")
         self.assertEqual((status, body[:8]), (200, b"\x89HDF\r\n\x1a\n"))
+        status, _, body = self.get(f"/v1/jobs/{self.job}/trajectory.geojson")
+        kinds = [f["properties"]["kind"] for f in json.loads(body)["features"]]
+        self.assertEqual((status, kinds[:2]), (200, ["dead_reckoning", "corrected"]))
+        accepted_loops = sum(1 for c in report["registrations"] if c["type"] == "loop" and c["accepted"])
+        self.assertEqual(kinds.count("loop_closure"), accepted_loops)
         # The corrected GSF by ranges, across the boundary of its stored chunks (1 MiB).
         owner = [("authorization", "Bearer " + self.tokens["owner"])]
         gsf = b"".join(c.data for c in self.server.maps.GetMap(map_pb2.GetMapRequest(job_id=self.job, format=map_pb2.GSF),
@@ -294,7 +299,8 @@ class HttpApiTest(unittest.TestCase):
         routes = ["/v1/surveys", "/v1/jobs", f"/v1/jobs?survey_id={self.survey}", f"/v1/jobs/{self.job}",
                   f"/v1/jobs/{self.job}/report.json", f"/v1/jobs/{self.job}/plots/trajectory.png",
                   f"/v1/jobs/{self.job}/map.tif", f"/v1/jobs/{self.job}/map.bag", f"/v1/jobs/{self.job}/tiles.json",
-                  f"/v1/jobs/{self.job}/tiles/0/0/0.png", f"/v1/jobs/{self.job}/events"]
+                  f"/v1/jobs/{self.job}/tiles/0/0/0.png", f"/v1/jobs/{self.job}/events",
+                  f"/v1/jobs/{self.job}/trajectory.geojson"]
         for route in routes:
             before = database_fingerprint(self.server.url)
             for who in ("no token", "wrong token", "revoked token"):
