@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
-"""Load on loopback, bounded in time and count: 8 clients upload files and 8 read tiles at once
-for LOAD_SECONDS (default 60) while two `mchs` jobs run on the server's two workers. No call may
+"""Load on loopback, bounded in time and count: 8 clients upload files, 8 read tiles over gRPC
+and 8 read XYZ tiles over HTTP at once for LOAD_SECONDS (default 60) while two `mchs` jobs run
+on the server's two workers. No call may
 fail, both jobs must succeed, and the server's resident memory must stay under LOAD_MAX_RSS_MB
 (default 3000), during the load and after the jobs. Prints throughput and latency
 percentiles (docs/service.md's figures come from here). The same environment as
 service_api_test.py (set by ctest)."""
 import hashlib
+import http.client
+import json
+import math
 import random
 import threading
 import time
@@ -13,12 +17,13 @@ import unittest
 
 import grpc
 
+from http_api_test import HttpServer
 from reliability_test import final_state
-from service_api_test import ENV, Server, job_pb2, map_pb2, read, ready_survey, survey_pb2, upload_requests
+from service_api_test import ENV, job_pb2, map_pb2, read, ready_survey, survey_pb2, upload_requests
 
 SECONDS = float(ENV.get("LOAD_SECONDS", "60"))
 MAX_RSS_MB = float(ENV.get("LOAD_MAX_RSS_MB", "3000"))
-UPLOADERS = READERS = 8
+UPLOADERS = READERS = XYZ_READERS = 8
 
 
 def rss_mb(pid):
@@ -34,7 +39,7 @@ def percentiles(seconds):
 
 class LoadTest(unittest.TestCase):
     def setUp(self):
-        self.server = Server(args=["--workers", "2"])
+        self.server = HttpServer(args=["--workers", "2"])
         self.addCleanup(self.server.stop)
 
     def uploader(self, index, until, latencies, errors):
@@ -67,6 +72,42 @@ class LoadTest(unittest.TestCase):
             except grpc.RpcError as error:
                 errors.append(f"tile {tile.level}/{tile.col}/{tile.row}: {error.code()} {error.details()}")
 
+    def xyz_tiles(self):
+        """(z, x, y) of every XYZ tile over the map at the TileJSON's six finest native zooms."""
+        host, port = self.server.http.split("//")[1].rsplit(":", 1)
+        connection = http.client.HTTPConnection(host, int(port), timeout=60)
+        connection.request("GET", f"/v1/jobs/{self.job}/tiles.json")
+        tilejson = json.loads(connection.getresponse().read())
+        west, south, east, north = tilejson["bounds"]
+        tiles = []
+        for z in range(tilejson["maxzoom"] - 7, tilejson["maxzoom"] - 1):
+            n = 2 ** z
+            def xy(lon, lat):
+                phi = math.radians(lat)
+                return int((lon + 180) / 360 * n), int((1 - math.log(math.tan(phi) + 1 / math.cos(phi)) / math.pi) / 2 * n)
+            (x0, y0), (x1, y1) = xy(west, north), xy(east, south)
+            tiles += [(z, x, y) for x in range(x0, x1 + 1) for y in range(y0, y1 + 1)]
+        return tiles
+
+    def xyz_reader(self, tiles, until, latencies, errors):
+        """XYZ tiles over HTTP, one keep-alive connection, as a map viewer fetches them."""
+        rng = random.Random(len(latencies) + 100)
+        host, port = self.server.http.split("//")[1].rsplit(":", 1)
+        connection = http.client.HTTPConnection(host, int(port), timeout=60)
+        while time.monotonic() < until:
+            z, x, y = rng.choice(tiles)
+            try:
+                started = time.monotonic()
+                connection.request("GET", f"/v1/jobs/{self.job}/tiles/{z}/{x}/{y}.png")
+                reply = connection.getresponse()
+                body = reply.read()
+                latencies.append(time.monotonic() - started)
+                if reply.status != 200 or not body.startswith(b"\x89PNG"):
+                    errors.append(f"xyz tile {z}/{x}/{y}: HTTP {reply.status}")
+            except (OSError, http.client.HTTPException) as error:
+                errors.append(f"xyz tile {z}/{x}/{y}: {error}")
+                connection = http.client.HTTPConnection(host, int(port), timeout=60)
+
     def test_uploads_and_tile_reads_while_two_jobs_run(self):
         s = self.server
         self.nav = read("nav.csv")
@@ -81,11 +122,16 @@ class LoadTest(unittest.TestCase):
         running = [s.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30).id
                    for _ in range(2)]
 
+        xyz_tiles = self.xyz_tiles()
+        self.assertTrue(xyz_tiles)
         errors, upload_latency, tile_latency, tile_bytes, rss = [], [], [], [], [rss_mb(s.process.pid)]
+        xyz_latency = []
         until = time.monotonic() + SECONDS
         threads = [threading.Thread(target=self.uploader, args=(i, until, upload_latency, errors)) for i in range(UPLOADERS)]
         threads += [threading.Thread(target=self.reader, args=(tiles, until, tile_latency, tile_bytes, errors))
                     for _ in range(READERS)]
+        threads += [threading.Thread(target=self.xyz_reader, args=(xyz_tiles, until, xyz_latency, errors))
+                    for _ in range(XYZ_READERS)]
         for thread in threads:
             thread.start()
         while time.monotonic() < until:
@@ -99,18 +145,22 @@ class LoadTest(unittest.TestCase):
             self.assertEqual(final_state(s, job, seconds=900).state, job_pb2.SUCCEEDED, s.server_log())
         after_jobs = rss_mb(s.process.pid)
 
-        print(f"\n{SECONDS:.0f} s, {UPLOADERS} uploaders and {READERS} tile readers, two mchs jobs on 2 workers:\n"
+        print(f"\n{SECONDS:.0f} s, {UPLOADERS} uploaders, {READERS} tile readers and {XYZ_READERS} XYZ tile readers (HTTP), "
+              f"two mchs jobs on 2 workers:\n"
               f"  uploads: {len(upload_latency)} of {len(self.nav) / 1e6:.2f} MB "
               f"({len(upload_latency) / SECONDS:.1f}/s, {len(upload_latency) * len(self.nav) / 1e6 / SECONDS:.1f} MB/s); "
               f"create + upload {percentiles(upload_latency)}\n"
               f"  tiles: {len(tile_latency)} GeoTIFF tiles, mean {sum(tile_bytes) / max(1, len(tile_bytes)) / 1e3:.0f} kB "
               f"({len(tile_latency) / SECONDS:.1f}/s); {percentiles(tile_latency)}\n"
+              f"  XYZ tiles over HTTP: {len(xyz_latency)} of {len(xyz_tiles)} distinct "
+              f"({len(xyz_latency) / SECONDS:.1f}/s); {percentiles(xyz_latency)}\n"
               f"  server RSS: {rss[0]:.0f} MB at the start, {max(rss):.0f} MB at most, {after_jobs:.0f} MB after the jobs; "
               f"errors: {len(errors)}", flush=True)
         self.assertEqual(errors, [])
         self.assertTrue(jobs_ran, f"the jobs were not running during the load: {states}")
         self.assertGreater(len(upload_latency), UPLOADERS)
         self.assertGreater(len(tile_latency), READERS)
+        self.assertGreater(len(xyz_latency), XYZ_READERS)
         self.assertLess(max(rss + [after_jobs]), MAX_RSS_MB)
         self.assertIsNone(s.process.poll(), "the server died:\n" + s.server_log())
 
