@@ -164,14 +164,20 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
     for (int a = 0; a <= kLattice; ++a) {
       const auto [lon, lat] = mercator_to_lon_lat(west + (east - west) * a / kLattice, north - (north - south) * b / kLattice);
       lattice.push_back(projection.forward(lon, lat));
+      // Far from the CRS's zone (a zoomed-out tile) PROJ answers infinity: those points take no part.
+      if (!std::isfinite(lattice.back().easting) || !std::isfinite(lattice.back().northing)) continue;
       e_min = std::min(e_min, lattice.back().easting), e_max = std::max(e_max, lattice.back().easting);
       n_min = std::min(n_min, lattice.back().northing), n_max = std::max(n_max, lattice.back().northing);
     }
   }
-  const int col0 = std::max(0, static_cast<int>(std::floor((e_min - transform_[0]) / resolution_)) - 1);
-  const int col1 = std::min(width_, static_cast<int>(std::ceil((e_max - transform_[0]) / resolution_)) + 1);
-  const int row0 = std::max(0, static_cast<int>(std::floor((transform_[3] - n_max) / resolution_)) - 1);
-  const int row1 = std::min(height_, static_cast<int>(std::ceil((transform_[3] - n_min) / resolution_)) + 1);
+  if (!(e_min <= e_max && n_min <= n_max)) return std::nullopt;
+  // Cells of the map, clamped in floating point before any cast to int.
+  const auto column = [&](double e) { return std::clamp((e - transform_[0]) / resolution_, -1.0, width_ + 1.0); };
+  const auto row_of = [&](double n) { return std::clamp((transform_[3] - n) / resolution_, -1.0, height_ + 1.0); };
+  const int col0 = std::max(0, static_cast<int>(std::floor(column(e_min))) - 1);
+  const int col1 = std::min(width_, static_cast<int>(std::ceil(column(e_max))) + 1);
+  const int row0 = std::max(0, static_cast<int>(std::floor(row_of(n_max))) - 1);
+  const int row1 = std::min(height_, static_cast<int>(std::ceil(row_of(n_min))) + 1);
   if (col0 >= col1 || row0 >= row1) return std::nullopt;
 
   // Read no finer than a tile pixel's ground size: zoomed out, GDAL reads an overview.
@@ -211,7 +217,9 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
       const double e = (1 - fv) * ((1 - fu) * p00.easting + fu * p10.easting) + fv * ((1 - fu) * p01.easting + fu * p11.easting);
       const double n =
           (1 - fv) * ((1 - fu) * p00.northing + fu * p10.northing) + fv * ((1 - fu) * p01.northing + fu * p11.northing);
-      const int bx = static_cast<int>(std::floor((e - e0) / step_e)), by = static_cast<int>(std::floor((n0 - n) / step_n));
+      const double fx = std::floor((e - e0) / step_e), fy = std::floor((n0 - n) / step_n);
+      if (!(fx >= 0 && fx < width && fy >= 0 && fy < height)) continue;  // NaN too: a corner PROJ could not place
+      const int bx = static_cast<int>(fx), by = static_cast<int>(fy);
       const float here = at(bx, by);
       if (std::isnan(here)) continue;
       cv::Vec3b colour = colour_of(ramp, here, lo_, hi_);

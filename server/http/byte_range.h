@@ -14,7 +14,9 @@ struct RangeAnswer {
 };
 
 // The answer to `header` (the Range field's value; empty: none sent) for a resource of `size`
-// bytes. A header in another unit or not of the RFC's syntax is ignored (the whole resource).
+// bytes. A header in another unit or not of the RFC's syntax is ignored (the whole resource);
+// but cpp-httplib answers 416 itself, before any handler, to a header its parser refuses
+// (another unit, "Bytes", a space after "=", a range ending before it starts).
 RangeAnswer answer_range(std::string_view header, std::int64_t size);
 
 }  // namespace bathyslam::server::http

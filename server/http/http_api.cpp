@@ -47,18 +47,17 @@ int http_status(grpc::StatusCode code) {
   }
 }
 
+// Text from the request (a decoded path, a header) may be any bytes: they are replaced, never
+// thrown about, since a throw in the library's error handler ends the process.
 void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
+std::int64_t id_of(const std::string& text, const std::string& field);
+
 std::int64_t id_in_path(const httplib::Request& req, int group, const std::string& field) {
-  const std::string text = req.matches[group];
-  std::int64_t id = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
-  if (error != std::errc() || end != text.data() + text.size() || id <= 0)
-    throw invalid(field, "'" + text + "' is not a positive 64-bit id");
-  return id;
+  return id_of(req.matches[group], field);
 }
 
 // A tile coordinate: any int (xyz_tile_bounds says which are in range).
@@ -81,6 +80,15 @@ std::string hex_colour(const cv::Vec3b& bgr) {
   char text[8];
   std::snprintf(text, sizeof text, "#%02x%02x%02x", bgr[2], bgr[1], bgr[0]);
   return text;
+}
+
+// A positive id given as text (a query parameter, a header), refused naming `field`.
+std::int64_t id_of(const std::string& text, const std::string& field) {
+  std::int64_t id = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
+  if (error != std::errc() || end != text.data() + text.size() || id <= 0)
+    throw invalid(field, "'" + text + "' is not a positive 64-bit id");
+  return id;
 }
 
 int page_size_of(const httplib::Request& req) {
@@ -156,12 +164,18 @@ void send_product(const httplib::Request& req, httplib::Response& res, const Pro
                            });
 }
 
+// A product is the same bytes while the job's attempt is: a retried job may store new ones.
+std::string etag(const storage::JobRecord& job, const std::string& product, std::int64_t size) {
+  return "\"job" + std::to_string(job.id) + "-" + std::to_string(job.attempts) + "-" + product + "-" + std::to_string(size) +
+         "\"";
+}
+
 Product stored_map(ServiceContext& context, const storage::JobRecord& job, const std::string& format,
                    const std::string& content_type) {
   const storage::TileKey key{format, 0, 0, 0};
   const auto size = context.results.tile_size(job.id, key);
   if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + format + " map");
-  return {*size, content_type, "\"job" + std::to_string(job.id) + "-" + format + "-" + std::to_string(*size) + "\"",
+  return {*size, content_type, etag(job, format, *size),
           [&context, id = job.id, key](std::int64_t offset, std::int64_t length) {
             return context.results.tile_bytes(id, key, offset, length);
           }};
@@ -182,6 +196,12 @@ HttpApi::HttpApi(ServiceContext& context, JobEventBell& bell, const HttpOptions&
     tls_ = true;
   }
   server_->new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
+  // The library's range handling is off for every request, routed or not: send_product answers
+  // ranges of the products (byte_range.h), and a page, a plot or an error is sent whole.
+  server_->set_pre_routing_handler([](const httplib::Request& req, httplib::Response&) {
+    const_cast<httplib::Request&>(req).ranges.clear();
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
   // Headers and body go out in two writes: with Nagle's algorithm the second waited for the
   // client's delayed ACK, 40 ms on every cached tile (p99 49 ms against p50 2 ms).
   server_->set_tcp_nodelay(true);
@@ -194,6 +214,9 @@ HttpApi::HttpApi(ServiceContext& context, JobEventBell& bell, const HttpOptions&
   if (port_ <= 0)
     throw std::runtime_error("--http: cannot listen on " + options.host + ":" + std::to_string(options.port));
   thread_ = std::thread([this] { server_->listen_after_bind(); });
+  // stop() does nothing before the loop runs: wait for it, so that destroying this right away
+  // cannot leave the thread listening.
+  for (int waited = 0; waited < 5000 && !server_->is_running(); ++waited) std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
 HttpApi::~HttpApi() {
@@ -205,8 +228,6 @@ void HttpApi::route(const std::string& pattern, Body body) {
   // Every route: the caller's tenant first, refusals as JSON {"error": ...} with the status the
   // gRPC API would give in HTTP's words, and one log line with what was sent.
   server_->Get(pattern, [this, body](const httplib::Request& req, httplib::Response& res) {
-    // The library's range handling is off: send_product answers ranges (byte_range.h).
-    const_cast<httplib::Request&>(req).ranges.clear();
     res.status = 200;
     const grpc::Status status = status_of(("HTTP GET " + req.path).c_str(), [&] {
       const std::string authorization = req.get_header_value("Authorization");
@@ -243,7 +264,7 @@ void HttpApi::add_routes() {
     const int limit = page_size_of(req);
     const std::int64_t before = page_token(req.get_param_value("page_token"));
     std::optional<std::int64_t> survey;
-    if (req.has_param("survey_id")) survey = owned_survey(context_, tenant, page_token(req.get_param_value("survey_id"))).id;
+    if (req.has_param("survey_id")) survey = owned_survey(context_, tenant, id_of(req.get_param_value("survey_id"), "survey_id")).id;
     json jobs = json::array();
     std::int64_t last = 0;
     for (const storage::JobRecord& job : context_.jobs.list_jobs(tenant, survey, before, limit + 1)) {
@@ -292,7 +313,7 @@ void HttpApi::add_routes() {
     const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
     if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
     send_product(req, res,
-                 {*size, "application/octet-stream", "\"job" + std::to_string(job.id) + "-gsf-" + std::to_string(*size) + "\"",
+                 {*size, "application/octet-stream", etag(job, "gsf", *size),
                   [this, id = job.id](std::int64_t offset, std::int64_t length) {
                     return context_.results.file_bytes(id, kCorrectedGsfFile, offset, length);
                   }});
@@ -300,7 +321,10 @@ void HttpApi::add_routes() {
   // The page and its files (web_files.h): public, as any page is; what it shows asks for the token.
   const auto serve_file = [](const std::string& name, httplib::Response& res) {
     const auto file = web_files().find(name);
-    if (file == web_files().end()) return;
+    if (file == web_files().end()) {
+      res.status = 404;  // the error handler says so
+      return;
+    }
     res.status = 200;
     res.set_header("Cache-Control", "no-cache");  // a new server build brings a new page
     res.set_content(std::string(file->second.bytes), std::string(file->second.content_type));
@@ -312,6 +336,7 @@ void HttpApi::add_routes() {
   // Any other path, and the library's own refusals (a malformed Range: 416), say so in JSON too.
   server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
     if (!res.body.empty() || res.content_provider_) return;
+    // Nothing may leave this handler: the library calls it outside its own try.
     std::string what = "refused (HTTP " + std::to_string(res.status) + ")";
     if (res.status == 404) what = "no such resource: " + req.path;
     if (res.status == 416) what = "Range: cannot read '" + req.get_header_value("Range") + "'";
@@ -321,20 +346,33 @@ void HttpApi::add_routes() {
   });
 }
 
+namespace {
+
+// The job, if the tenant's and succeeded: the tiles are drawn from its final map and cached as
+// such (a running or retried job's map may still change).
+storage::JobRecord finished_map_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id) {
+  storage::JobRecord job = job_with_results(context, tenant, job_id);
+  if (job.state != storage::JobState::kSucceeded)
+    throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                  "job_id: job " + std::to_string(job.id) + " is " + storage::to_string(job.state) + "; its tiles come when it succeeds");
+  return job;
+}
+
+}  // namespace
+
 std::shared_ptr<const XyzTileSource> HttpApi::tile_source(const storage::JobRecord& job) {
   return tiles_.source(job.id, [&] {
     const auto grid = context_.results.map_grid(job.id);
     auto cog = context_.results.tile(job.id, {"cog", 0, 0, 0});
     if (!grid || grid->epsg <= 0 || !cog)
       throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no map");
-    if (!cog) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no map");
     return std::make_shared<const XyzTileSource>(std::move(*cog), "EPSG:" + std::to_string(grid->epsg));
   });
 }
 
 void HttpApi::add_tile_routes() {
   route(R"(/v1/jobs/([0-9]+)/tiles\.json)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
-    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+    const storage::JobRecord job = finished_map_job(context_, tenant, id_in_path(req, 1, "job_id"));
     const std::shared_ptr<const XyzTileSource> source = tile_source(job);
     const auto [west, south, east, north] = source->lon_lat_bounds();
     const int finest = finest_zoom(source->resolution(), (south + north) / 2);
@@ -356,7 +394,7 @@ void HttpApi::add_tile_routes() {
   });
   route(R"(/v1/jobs/([0-9]+)/tiles/(-?[0-9]+)/(-?[0-9]+)/(-?[0-9]+)\.png)",
         [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
-          const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+          const storage::JobRecord job = finished_map_job(context_, tenant, id_in_path(req, 1, "job_id"));
           const int z = coordinate_in_path(req, 2, "z"), x = coordinate_in_path(req, 3, "x"), y = coordinate_in_path(req, 4, "y");
           try {
             xyz_tile_bounds(z, x, y);
@@ -364,7 +402,8 @@ void HttpApi::add_tile_routes() {
             throw invalid("tile " + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y), error.what());
           }
           const bool shade = req.get_param_value("shade") != "0";
-          const std::shared_ptr<const std::string> png = tiles_.tile(job.id, z, x, y, shade, *tile_source(job));
+          const std::shared_ptr<const std::string> png =
+              tiles_.tile(job.id, z, x, y, shade, [&] { return tile_source(job); });
           if (!png)
             throw Refusal(grpc::StatusCode::NOT_FOUND, "tile " + std::to_string(z) + "/" + std::to_string(x) + "/" +
                                                            std::to_string(y) + " is outside job " + std::to_string(job.id) + "'s map");
@@ -392,7 +431,7 @@ void HttpApi::add_event_routes() {
   route(R"(/v1/jobs/([0-9]+)/events)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
     const storage::JobRecord job = owned_job(context_, tenant, id_in_path(req, 1, "job_id"));
     std::int64_t last = 0;
-    if (req.has_header("Last-Event-ID")) last = page_token(req.get_header_value("Last-Event-ID"));
+    if (req.has_header("Last-Event-ID")) last = id_of(req.get_header_value("Last-Event-ID"), "Last-Event-ID");
     auto slot = std::make_shared<StreamSlots::Slot>(
         slot_or_refuse(event_slots_, tenant, "event streams open on this server", "8 a tenant", "close one first"));
     if (++event_streams_ > kMaxEventStreams) {

@@ -8,9 +8,10 @@
 // On cpp-httplib (Debian's libcpp-httplib-dev): a thread pool, TLS from the same PEM files as
 // gRPC, and a few hundred lines less than Boost.Beast for the same routes. The map is also
 // served as XYZ tiles in Web Mercator (core/tiles/xyz_tiles.h) with a TileJSON document, for
-// web maps and QGIS. Its own range
-// handling is bypassed (byte_range.h): in Debian's 0.11.4 a range beyond the end is answered
-// with a negative length.
+// web maps and QGIS. The library's range handling is switched off for every request (a
+// pre-routing handler; byte_range.h answers ranges of the products): in Debian's 0.11.4 a range
+// beyond the end is answered with a negative length. A Range header its parser refuses is
+// still its own 416, before any handler runs.
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -62,8 +63,9 @@ class HttpApi {
   ServiceContext& context_;
   JobEventBell& bell_;
   bool tls_ = false;
-  // Each open event stream holds one of the library's threads: a tenant may hold a few, and all
-  // of them together leave threads for every other request (kThreads in http_api.cpp).
+  // Each open event stream holds one of the library's threads: a tenant may hold 8, and all of
+  // them together 24 of the 32 (kThreads in http_api.cpp). Idle keep-alive connections hold
+  // threads too (up to 5 s each), so this bounds what streams take; it does not reserve the rest.
   StreamSlots event_slots_{8};
   std::atomic<int> event_streams_{0};
   XyzCache tiles_{256u << 20, 64u << 20};  // maps in memory, drawn tiles

@@ -37,27 +37,43 @@ void insert(Lru& lru, const Key& key, const Value& value, std::size_t max_bytes)
 
 }  // namespace
 
-std::shared_ptr<const XyzTileSource> XyzCache::source(std::int64_t job_id,
-                                                      const std::function<std::shared_ptr<const XyzTileSource>()>& load) {
-  {
-    const std::lock_guard lock(mutex_);
-    if (auto held = find(sources_, job_id)) return *held;
+XyzCache::Source XyzCache::source(std::int64_t job_id, const std::function<Source()>& load) {
+  std::unique_lock lock(mutex_);
+  if (auto held = find(sources_, job_id)) return *held;
+  if (const auto it = loading_.find(job_id); it != loading_.end()) {
+    const std::shared_future<Source> pending = it->second;
+    lock.unlock();
+    return pending.get();  // the loader's refusal, if it failed, is this request's too
   }
-  std::shared_ptr<const XyzTileSource> loaded = load();  // seconds for a large map: not under the lock
-  const std::lock_guard lock(mutex_);
-  insert(sources_, job_id, loaded, max_source_bytes_);
-  return loaded;
+  std::promise<Source> promise;
+  loading_.emplace(job_id, promise.get_future().share());
+  lock.unlock();
+  try {
+    Source loaded = load();  // seconds for a large map: not under the lock
+    lock.lock();
+    loading_.erase(job_id);
+    insert(sources_, job_id, loaded, max_source_bytes_);
+    lock.unlock();
+    promise.set_value(loaded);
+    return loaded;
+  } catch (...) {
+    if (!lock.owns_lock()) lock.lock();
+    loading_.erase(job_id);
+    lock.unlock();
+    promise.set_exception(std::current_exception());
+    throw;
+  }
 }
 
 std::shared_ptr<const std::string> XyzCache::tile(std::int64_t job_id, int z, int x, int y, bool shade,
-                                                  const XyzTileSource& source) {
+                                                  const std::function<Source()>& source) {
   const TileKey key{job_id, z, x, y, shade};
   {
     const std::lock_guard lock(mutex_);
     if (auto held = find(tiles_, key)) return *held;
   }
   std::shared_ptr<const std::string> png;
-  if (auto drawn = source.tile_png(z, x, y, shade)) png = std::make_shared<const std::string>(drawn->begin(), drawn->end());
+  if (auto drawn = source()->tile_png(z, x, y, shade)) png = std::make_shared<const std::string>(drawn->begin(), drawn->end());
   const std::lock_guard lock(mutex_);
   insert(tiles_, key, png, max_tile_bytes_);
   return png;

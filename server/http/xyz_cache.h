@@ -4,6 +4,7 @@
 // tiles never change once its job has stored them, so nothing else invalidates an entry.
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <list>
 #include <map>
 #include <memory>
@@ -22,12 +23,15 @@ class XyzCache {
   XyzCache(std::size_t max_source_bytes, std::size_t max_tile_bytes)
       : max_source_bytes_(max_source_bytes), max_tile_bytes_(max_tile_bytes) {}
 
-  // The job's tile source, made by `load` (outside the lock) when it is not held.
-  std::shared_ptr<const XyzTileSource> source(std::int64_t job_id,
-                                              const std::function<std::shared_ptr<const XyzTileSource>()>& load);
-  // The tile's PNG (nullptr: the tile does not meet the map), drawn when it is not held.
+  using Source = std::shared_ptr<const XyzTileSource>;
+  // The job's tile source, made by `load` (outside the lock) when it is not held; requests that
+  // miss together wait for one load (a viewer's first screen asks for dozens of tiles at once,
+  // and each load holds the COG twice).
+  Source source(std::int64_t job_id, const std::function<Source()>& load);
+  // The tile's PNG (nullptr: the tile does not meet the map), drawn from `source()` when it is
+  // not held: a held tile needs no source.
   std::shared_ptr<const std::string> tile(std::int64_t job_id, int z, int x, int y, bool shade,
-                                          const XyzTileSource& source);
+                                          const std::function<Source()>& source);
 
  private:
   template <typename Key, typename Value>
@@ -39,7 +43,8 @@ class XyzCache {
   using TileKey = std::tuple<std::int64_t, int, int, int, bool>;
   std::size_t max_source_bytes_, max_tile_bytes_;
   std::mutex mutex_;
-  Lru<std::int64_t, std::shared_ptr<const XyzTileSource>> sources_;
+  Lru<std::int64_t, Source> sources_;
+  std::map<std::int64_t, std::shared_future<Source>> loading_;
   Lru<TileKey, std::shared_ptr<const std::string>> tiles_;
 };
 

@@ -295,6 +295,25 @@ class HttpApiTest(unittest.TestCase):
             self.assertEqual(headers["Content-Type"], "application/json", path)
             self.assertTrue(json.loads(body)["error"], path)
 
+    def test_bytes_that_are_not_utf8_and_static_files(self):
+        # The decoded path and the Range header go into the JSON error: not UTF-8, they are
+        # replaced, and the server (whose error handler runs outside the library's try) lives.
+        status, _, body = self.get("/%FF%FE")
+        self.assertEqual(status, 404)
+        self.assertIn("no such resource", json.loads(body)["error"])
+        status, _, body = self.get(f"/v1/jobs/{self.job}/map.tif", headers={"Range": "bytes=\xff"})
+        self.assertEqual(status, 416)
+        self.assertIn("Range", json.loads(body)["error"])
+        self.assertEqual(self.get("/v1/surveys")[0], 200)
+        status, headers, body = self.get("/static/app.js", who="no token", headers={"Range": "bytes=0-9"})
+        self.assertEqual((status, headers["Content-Type"]), (200, "text/javascript; charset=utf-8"))
+        self.assertGreater(len(body), 1000, "a page's file is sent whole, whatever the Range")
+        status, _, body = self.get("/static/no-such-file.js", who="no token")
+        self.assertEqual(status, 404)
+        self.assertIn("no such resource", json.loads(body)["error"])
+        status, _, body = self.get("/", who="no token")
+        self.assertIn(b"<title>bathyslam</title>", body)
+
     def test_every_route_and_caller(self):
         routes = ["/v1/surveys", "/v1/jobs", f"/v1/jobs?survey_id={self.survey}", f"/v1/jobs/{self.job}",
                   f"/v1/jobs/{self.job}/report.json", f"/v1/jobs/{self.job}/plots/trajectory.png",

@@ -75,6 +75,12 @@ class PythonClientTest(unittest.TestCase):
                 client.submit(survey, "no-such-configuration")
             with self.assertRaises(ValueError):
                 client.upload(os.path.join(BUNDLE, "nav.csv"))
+            target = os.path.join(STUBS, "refused_map.tif")
+            with self.assertRaises(ValueError):
+                client.download_map(1, target, format="png")
+            with self.assertRaises(bathyslam.NotFound):
+                client.download_map(987654, target)
+            self.assertFalse(os.path.exists(target) or os.path.exists(target + ".part"), "a refused download left a file")
         with bathyslam.Client(self.server.address, token="bst_" + "0" * 40) as stranger:
             with self.assertRaises(bathyslam.Unauthenticated):
                 stranger.job(1)

@@ -92,9 +92,10 @@ class Client:
                 return survey.id
             survey_id = survey.id
         else:
-            survey_id = self._call("CreateSurvey", self._surveys.CreateSurvey, survey_pb2.CreateSurveyRequest(
-                name=declared["name"], crs=declared["crs"], sonar_json=json.dumps(declared["sonar"]),
-                vehicle_json=json.dumps(declared["vehicle"]))).id
+            request = survey_pb2.CreateSurveyRequest(name=declared["name"], crs=declared["crs"],
+                                                     sonar_json=json.dumps(declared["sonar"]),
+                                                     vehicle_json=json.dumps(declared["vehicle"]))
+            survey_id = self._retrying(lambda: self._call("CreateSurvey", self._surveys.CreateSurvey, request)).id
         for file_name, path in files:
             self._retrying(lambda: self._upload_file(survey_id, file_name, path, progress))
         self._retrying(lambda: self._call("FinalizeSurvey", self._surveys.FinalizeSurvey,
@@ -140,6 +141,8 @@ class Client:
                 sent, first = offset, True
                 while first or sent < size:
                     data = f.read(CHUNK)
+                    if not data and sent < size:  # the file shrank while it was being sent
+                        raise ValueError(f"{path}: shorter than the {size} bytes it had")
                     message = survey_pb2.UploadFileRequest(offset=sent, data=data)
                     if first:
                         message.survey_id, message.file_name = survey_id, file_name
@@ -169,16 +172,20 @@ class Client:
     def watch(self, job_id, progress=None, timeout=24 * 3600):
         """Waits for the job to end, calling `progress(stage, fraction, message)` for each event;
         returns the job (a dict) when it succeeded, raises JobFailed when it failed or was cancelled."""
-        try:
-            for event in self._jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job_id), timeout=timeout,
-                                             metadata=self._metadata):
-                if progress:
-                    progress(event.stage, event.progress, event.message)
-                if event.state in FINISHED:
-                    break
-        except grpc.RpcError as error:
-            raise error_of("WatchJob", error) from None
-        job = self.job(job_id)
+        deadline = time.monotonic() + timeout
+        while True:  # a stream the server ended early (a restart) is opened again
+            try:
+                for event in self._jobs.WatchJob(job_pb2.WatchJobRequest(job_id=job_id), metadata=self._metadata,
+                                                 timeout=max(1.0, deadline - time.monotonic())):
+                    if progress:
+                        progress(event.stage, event.progress, event.message)
+                    if event.state in FINISHED:
+                        break
+            except grpc.RpcError as error:
+                raise error_of("WatchJob", error) from None
+            job = self.job(job_id)
+            if job["state"] not in ("queued", "running") or time.monotonic() >= deadline:
+                break
         if job["state"] != "succeeded":
             raise JobFailed(job)
         return job
@@ -191,14 +198,19 @@ class Client:
     def download_map(self, job_id, path, format="cog"):
         """Writes the job's map to `path`: "cog" (GeoTIFF), "bag" or "gsf" (the pings with the
         corrected navigation); written to a temporary name first, so `path` is whole or absent."""
+        if format not in FORMATS:
+            raise ValueError(f"download_map: format must be one of {sorted(FORMATS)}, not {format!r}")
         partial = path + ".part"
         try:
             with open(partial, "wb") as out:
                 for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format]),
                                                timeout=3600, metadata=self._metadata):
                     out.write(chunk.data)
-        except grpc.RpcError as error:
-            os.remove(partial)
-            raise error_of("GetMap", error) from None
+        except BaseException as error:  # a refusal, a full disk, Ctrl-C: no half file stays
+            if os.path.exists(partial):
+                os.remove(partial)
+            if isinstance(error, grpc.RpcError):
+                raise error_of("GetMap", error) from None
+            raise
         os.replace(partial, path)
         return path

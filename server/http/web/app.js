@@ -4,7 +4,7 @@
 // downloads and progress are fetched by hand rather than by <img>, <a> or EventSource.
 "use strict";
 
-const state = { token: sessionStorage.getItem("bathyslam-token") || "", openJob: null, streams: new Map() };
+const state = { token: sessionStorage.getItem("bathyslam-token") || "", openJob: null, streams: new Map(), refresh: 0 };
 const $ = (id) => document.getElementById(id);
 
 function headers() {
@@ -60,6 +60,10 @@ function renderSurveys(surveys) {
   }
 }
 
+const active = (job) => job.state === "queued" || job.state === "running";
+
+// The list is read again every few seconds while a job is active; only the open job has a stream
+// of its own (a browser keeps six connections to a server, and a stream holds one).
 function renderJobs(jobs) {
   const body = $("jobs").tBodies[0];
   body.replaceChildren();
@@ -67,7 +71,16 @@ function renderJobs(jobs) {
     const row = body.insertRow();
     row.id = `job-row-${job.id}`;
     updateJobRow(row, job);
-    if (job.state === "queued" || job.state === "running") followProgress(job.id);
+  }
+  clearTimeout(state.refresh);
+  if (jobs.some(active)) state.refresh = setTimeout(refreshJobs, 5000);
+}
+
+async function refreshJobs() {
+  try {
+    renderJobs((await json("/v1/jobs?page_size=1000")).jobs);
+  } catch (error) {
+    showError(error);
   }
 }
 
@@ -122,6 +135,7 @@ function onEvent(jobId, text) {
   } else if (fields.event === "end") {
     if (row) updateJobRow(row, data);
     if (state.openJob === jobId) openJob(jobId);
+    refreshJobs();
   }
 }
 
@@ -137,6 +151,7 @@ async function openJob(jobId) {
   document.body.dataset.jobState = job.state;
   if (job.state !== "succeeded") {
     $("report").textContent = job.state === "failed" ? `failed: ${job.error}` : "waiting for the job to finish";
+    if (active(job)) followProgress(jobId);
     return;
   }
   try {
@@ -184,7 +199,7 @@ const AuthorisedTiles = L.TileLayer.extend({
     const tile = document.createElement("img");
     tile.alt = "";
     api(this.getTileUrl(coords)).then((r) => r.blob()).then((blob) => {
-      tile.onload = () => done(null, tile);
+      tile.onload = () => { URL.revokeObjectURL(tile.src); done(null, tile); };  // drawn: the bytes can go
       tile.src = URL.createObjectURL(blob);
     }).catch((error) => done(error, tile));
     return tile;
