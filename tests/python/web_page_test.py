@@ -33,7 +33,8 @@ class Browser:
     def __init__(self, url):
         self.profile = tempfile.mkdtemp(prefix="bathyslam-chromium-")
         self.process = subprocess.Popen(
-            ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--window-size=1280,1400",
+            ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--hide-scrollbars",
+             "--window-size=1280,1400",
              "--remote-debugging-port=0", f"--user-data-dir={self.profile}", url],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         for line in self.process.stderr:
