@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -176,6 +177,9 @@ std::shared_ptr<grpc::ServerCredentials> server_credentials(const ServeOptions& 
 }
 
 int serve(const ServeOptions& o) {
+  // Refused before anything starts: a bad --http value must not leave a server half up.
+  std::optional<bathyslam::server::http::HttpOptions> http_config;
+  if (!o.http.empty()) http_config = http_options(o);
   // Block the stop signals before any thread starts, so every thread inherits the mask; one
   // thread waits for them and shuts down cleanly.
   sigset_t stop_signals;
@@ -239,7 +243,7 @@ int serve(const ServeOptions& o) {
   scheduler.start();
   service::DatabaseHealth database_health(o.db, server->GetHealthCheckService(), std::chrono::seconds(1));
   std::unique_ptr<bathyslam::server::http::HttpApi> http;
-  if (!o.http.empty()) http = std::make_unique<bathyslam::server::http::HttpApi>(context, job_event_bell, http_options(o));
+  if (http_config) http = std::make_unique<bathyslam::server::http::HttpApi>(context, job_event_bell, *http_config);
   std::thread stopper([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
@@ -249,11 +253,7 @@ int serve(const ServeOptions& o) {
   // The port actually bound (":0" asks for any free one): tests and scripts read it here.
   const std::string address = o.listen.substr(0, o.listen.rfind(':')) + ":" + std::to_string(port);
   std::printf("bathyslam-server listening on %s\n", address.c_str());
-  if (http) {
-    const std::string http_host = o.http.substr(0, o.http.rfind(':'));
-    std::printf("bathyslam-server http on %s://%s:%d\n", o.tls_cert.empty() ? "http" : "https",
-                o.http.find(':') == std::string::npos ? "127.0.0.1" : http_host.c_str(), http->port());
-  }
+  if (http) std::printf("bathyslam-server http on %s://%s:%d\n", o.tls_cert.empty() ? "http" : "https", http_config->host.c_str(), http->port());
   std::fflush(stdout);
   service::log("listening on %s; %d workers; %s", address.c_str(), o.workers,
               context.dev_tenant ? ("callers without a token act as tenant '" + o.dev_tenant + "'").c_str()

@@ -29,27 +29,16 @@ Ramp diverging_ramp() {
   return ramp;
 }
 
-// Lambertian shade (0..1) of the elevation surface lit from the north-west at 45°; central
-// differences, one-sided beside a cell without data, flat where both neighbours lack it.
+// The hillshade (relief_colours.h) of every cell with data; 1 elsewhere.
 cv::Mat hillshade(const GridRaster& map) {
   const GridGeometry& g = map.geometry;
   cv::Mat shade(g.height, g.width, CV_32F, cv::Scalar(1));
   auto z = [&](int x, int y) {
     return x < 0 || y < 0 || x >= g.width || y >= g.height ? NAN : map.elevation[static_cast<std::size_t>(y) * g.width + x];
   };
-  auto slope = [&](float before, float here, float after, double step) {
-    if (!std::isnan(before) && !std::isnan(after)) return (after - before) / (2 * step);
-    if (!std::isnan(after)) return (after - here) / step;
-    if (!std::isnan(before)) return (here - before) / step;
-    return 0.0;
-  };
   for (int y = 0; y < g.height; ++y) {
     for (int x = 0; x < g.width; ++x) {
-      const float here = z(x, y);
-      if (std::isnan(here)) continue;
-      const double east = slope(z(x - 1, y), here, z(x + 1, y), g.resolution_m);
-      const double north = slope(z(x, y + 1), here, z(x, y - 1), g.resolution_m);  // row 0 is north
-      shade.at<float>(y, x) = static_cast<float>(lambert_shade(east, north));
+      if (!std::isnan(z(x, y))) shade.at<float>(y, x) = static_cast<float>(shade_at(z, x, y, g.resolution_m, g.resolution_m));
     }
   }
   return shade;

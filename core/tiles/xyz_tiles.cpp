@@ -194,12 +194,6 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
   const auto at = [&](int bx, int by) {
     return bx < 0 || by < 0 || bx >= width || by >= height ? NAN : elevation[static_cast<std::size_t>(by) * width + bx];
   };
-  const auto slope = [](float before, float here, float after, double step) {
-    if (!std::isnan(before) && !std::isnan(after)) return (after - before) / (2 * step);
-    if (!std::isnan(after)) return (after - here) / step;
-    if (!std::isnan(before)) return (here - before) / step;
-    return 0.0;
-  };
 
   static const Ramp ramp = turbo_ramp();
   cv::Mat image(kXyzTileSide, kXyzTileSide, CV_8UC4, cv::Scalar(0, 0, 0, 0));
@@ -223,11 +217,7 @@ std::optional<std::vector<std::uint8_t>> XyzTileSource::tile_png(int z, int x, i
       const float here = at(bx, by);
       if (std::isnan(here)) continue;
       cv::Vec3b colour = colour_of(ramp, here, lo_, hi_);
-      if (shade) {
-        const double east_slope = slope(at(bx - 1, by), here, at(bx + 1, by), step_e);
-        const double north_slope = slope(at(bx, by + 1), here, at(bx, by - 1), step_n);  // buffer row 0 is north
-        colour = colour * light_of(lambert_shade(east_slope, north_slope));
-      }
+      if (shade) colour = colour * light_of(shade_at(at, bx, by, step_e, step_n));  // buffer row 0 is north
       image.at<cv::Vec4b>(j, i) = cv::Vec4b(colour[0], colour[1], colour[2], 255);
     }
   }

@@ -54,7 +54,14 @@ void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
-std::int64_t id_of(const std::string& text, const std::string& field);
+// A positive id given as text (a query parameter, a header), refused naming `field`.
+std::int64_t id_of(const std::string& text, const std::string& field) {
+  std::int64_t id = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
+  if (error != std::errc() || end != text.data() + text.size() || id <= 0)
+    throw invalid(field, "'" + text + "' is not a positive 64-bit id");
+  return id;
+}
 
 std::int64_t id_in_path(const httplib::Request& req, int group, const std::string& field) {
   return id_of(req.matches[group], field);
@@ -82,15 +89,6 @@ std::string hex_colour(const cv::Vec3b& bgr) {
   return text;
 }
 
-// A positive id given as text (a query parameter, a header), refused naming `field`.
-std::int64_t id_of(const std::string& text, const std::string& field) {
-  std::int64_t id = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
-  if (error != std::errc() || end != text.data() + text.size() || id <= 0)
-    throw invalid(field, "'" + text + "' is not a positive 64-bit id");
-  return id;
-}
-
 int page_size_of(const httplib::Request& req) {
   if (!req.has_param("page_size")) return page_size(0);
   const std::string text = req.get_param_value("page_size");
@@ -98,6 +96,18 @@ int page_size_of(const httplib::Request& req) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), size);
   if (error != std::errc() || end != text.data() + text.size()) throw invalid("page_size", "'" + text + "' is not a number");
   return page_size(size);
+}
+
+// One page of a list read with one row more than `size` (trim_to_page), as {key: [...],
+// "next_page_token"} where there is a next page.
+template <typename Row, typename ToJson>
+json page_of(std::vector<Row> rows, int size, const char* key, ToJson to_json) {
+  const bool more = trim_to_page(rows, size);
+  json items = json::array();
+  for (const Row& row : rows) items.push_back(to_json(row));
+  json reply = {{key, std::move(items)}};
+  if (more) reply["next_page_token"] = std::to_string(rows.back().id);
+  return reply;
 }
 
 json job_json(const storage::JobRecord& job) {
@@ -119,7 +129,7 @@ json job_json(const storage::JobRecord& job) {
 struct Product {
   std::int64_t size = 0;
   std::string content_type;
-  std::string etag;  // the job's products never change once stored
+  std::string etag;  // etag() below: the same while the job's attempt is
   std::function<storage::Bytes(std::int64_t offset, std::int64_t length)> read;
 };
 
@@ -247,34 +257,18 @@ void HttpApi::route(const std::string& pattern, Body body) {
 
 void HttpApi::add_routes() {
   route("/v1/surveys", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
-    const int limit = page_size_of(req);
-    const std::int64_t after = page_token(req.get_param_value("page_token"));
-    json surveys = json::array();
-    std::int64_t last = 0;
-    for (const storage::SurveyRecord& s : context_.surveys.list_surveys(tenant, after, limit + 1)) {
-      if (static_cast<int>(surveys.size()) == limit) break;
-      surveys.push_back({{"id", s.id}, {"name", s.name}, {"crs", s.crs}, {"ready", s.ready}});
-      last = s.id;
-    }
-    json reply = {{"surveys", surveys}};
-    if (static_cast<int>(surveys.size()) == limit && last > 0) reply["next_page_token"] = std::to_string(last);
-    send_json(res, reply);
+    const int size = page_size_of(req);
+    send_json(res, page_of(context_.surveys.list_surveys(tenant, page_token(req.get_param_value("page_token")), size + 1),
+                           size, "surveys", [](const storage::SurveyRecord& s) {
+                             return json{{"id", s.id}, {"name", s.name}, {"crs", s.crs}, {"ready", s.ready}};
+                           }));
   });
   route("/v1/jobs", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
-    const int limit = page_size_of(req);
-    const std::int64_t before = page_token(req.get_param_value("page_token"));
+    const int size = page_size_of(req);
     std::optional<std::int64_t> survey;
     if (req.has_param("survey_id")) survey = owned_survey(context_, tenant, id_of(req.get_param_value("survey_id"), "survey_id")).id;
-    json jobs = json::array();
-    std::int64_t last = 0;
-    for (const storage::JobRecord& job : context_.jobs.list_jobs(tenant, survey, before, limit + 1)) {
-      if (static_cast<int>(jobs.size()) == limit) break;
-      jobs.push_back(job_json(job));
-      last = job.id;
-    }
-    json reply = {{"jobs", jobs}};
-    if (static_cast<int>(jobs.size()) == limit && last > 0) reply["next_page_token"] = std::to_string(last);
-    send_json(res, reply);
+    send_json(res, page_of(context_.jobs.list_jobs(tenant, survey, page_token(req.get_param_value("page_token")), size + 1),
+                           size, "jobs", job_json));
   });
   route(R"(/v1/jobs/([0-9]+))", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
     send_json(res, job_json(owned_job(context_, tenant, id_in_path(req, 1, "job_id"))));
@@ -414,10 +408,6 @@ void HttpApi::add_tile_routes() {
 
 namespace {
 
-bool finished(storage::JobState state) {
-  return state != storage::JobState::kQueued && state != storage::JobState::kRunning;
-}
-
 std::string server_sent_event(const std::string& name, const json& data, std::int64_t id = 0) {
   return (id > 0 ? "id: " + std::to_string(id) + "\n" : std::string()) + "event: " + name + "\ndata: " + data.dump() + "\n\n";
 }
@@ -461,7 +451,7 @@ void HttpApi::add_event_routes() {
                 return false;
               last = stored.id;
             }
-            if (finished(now->state)) {
+            if (storage::finished(now->state)) {
               send(server_sent_event("end", job_json(*now)));
               sink.done();
               return true;

@@ -30,10 +30,6 @@ v1::JobState to_proto(storage::JobState state) {
   return v1::JOB_STATE_UNSPECIFIED;
 }
 
-bool finished(storage::JobState state) {
-  return state != storage::JobState::kQueued && state != storage::JobState::kRunning;
-}
-
 void describe(const storage::JobRecord& job, v1::Job* reply) {
   reply->set_id(job.id);
   reply->set_survey_id(job.survey_id);
@@ -190,8 +186,7 @@ grpc::Status JobService::ListJobs(grpc::ServerContext* call, const v1::ListJobsR
     if (request->survey_id() != 0) survey = owned_survey(context_, tenant, request->survey_id()).id;
     const int size = page_size(request->page_size());
     auto jobs = context_.jobs.list_jobs(tenant, survey, page_token(request->page_token()), size + 1);
-    const bool more = static_cast<int>(jobs.size()) > size;
-    if (more) jobs.pop_back();
+    const bool more = trim_to_page(jobs, size);
     for (const storage::JobRecord& job : jobs) describe(job, reply->add_jobs());
     if (more) reply->set_next_page_token(std::to_string(jobs.back().id));
   });

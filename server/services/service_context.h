@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <grpcpp/grpcpp.h>
 
@@ -84,6 +85,14 @@ storage::JobRecord job_with_results(ServiceContext& context, std::int64_t tenant
 // Page sizes (0 means 100, at most 1000) and page tokens (an id as decimal text).
 int page_size(int requested);
 std::int64_t page_token(const std::string& token);
+// A list read with one row more than `size` trimmed to the page: true when a next page exists
+// (its token is then the last row's id).
+template <typename Row>
+bool trim_to_page(std::vector<Row>& rows, int size) {
+  const bool more = static_cast<int>(rows.size()) > size;
+  if (more) rows.resize(static_cast<std::size_t>(size));
+  return more;
+}
 
 // Runs a handler: Refusal becomes its status; a transient database failure UNAVAILABLE (a lost
 // serialization race ABORTED), saying the cause in words; a scratch file the disk refused

@@ -303,8 +303,7 @@ grpc::Status SurveyService::ListSurveys(grpc::ServerContext* call, const v1::Lis
     }
     // One more than asked: whether there is a next page.
     auto surveys = context_.surveys.list_surveys(tenant, page_token(request->page_token()), size + 1, name);
-    const bool more = static_cast<int>(surveys.size()) > size;
-    if (more) surveys.pop_back();
+    const bool more = trim_to_page(surveys, size);
     for (const storage::SurveyRecord& survey : surveys) describe(survey, false, reply->add_surveys());
     if (more) reply->set_next_page_token(std::to_string(surveys.back().id));
   });

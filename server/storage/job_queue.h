@@ -19,6 +19,8 @@ namespace bathyslam::storage {
 
 enum class JobState { kQueued, kRunning, kSucceeded, kFailed, kCancelled };
 std::string to_string(JobState state);
+// Succeeded, failed or cancelled: the job will not change again.
+inline bool finished(JobState state) { return state != JobState::kQueued && state != JobState::kRunning; }
 JobState parse_job_state(std::string_view text);  // throws std::invalid_argument
 
 // What kept a worker from finishing a job that is not the job's fault.

@@ -40,6 +40,11 @@ class HttpServer(Server):
             raise RuntimeError("no HTTP endpoint: " + line + self.server_log())
         self.http = match.group(1)
 
+    def connection(self, timeout=60):
+        """A new HTTP connection to the endpoint."""
+        url = urllib.parse.urlsplit(self.http)
+        return http.client.HTTPConnection(url.hostname, url.port, timeout=timeout)
+
 
 class HttpApiTest(unittest.TestCase):
     @classmethod
@@ -64,8 +69,7 @@ class HttpApiTest(unittest.TestCase):
 
     def get(self, path, who="owner", headers=None):
         """(status, headers, body) of GET `path` as `who` ("no token" sends none)."""
-        url = urllib.parse.urlsplit(self.server.http)
-        connection = http.client.HTTPConnection(url.hostname, url.port, timeout=60)
+        connection = self.server.connection()
         headers = dict(headers or {})
         if who != "no token":
             headers["Authorization"] = "Bearer " + self.tokens[who]
@@ -248,8 +252,7 @@ class HttpApiTest(unittest.TestCase):
 
     def events(self, job, last_event_id=None):
         """The job's server-sent events until the stream ends: [(id, name, data)]."""
-        url = urllib.parse.urlsplit(self.server.http)
-        connection = http.client.HTTPConnection(url.hostname, url.port, timeout=120)
+        connection = self.server.connection(timeout=120)
         headers = {"Authorization": "Bearer " + self.tokens["owner"]}
         if last_event_id is not None:
             headers["Last-Event-ID"] = str(last_event_id)

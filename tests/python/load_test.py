@@ -74,8 +74,7 @@ class LoadTest(unittest.TestCase):
 
     def xyz_tiles(self):
         """(z, x, y) of every XYZ tile over the map at the TileJSON's six finest native zooms."""
-        host, port = self.server.http.split("//")[1].rsplit(":", 1)
-        connection = http.client.HTTPConnection(host, int(port), timeout=60)
+        connection = self.server.connection()
         connection.request("GET", f"/v1/jobs/{self.job}/tiles.json")
         tilejson = json.loads(connection.getresponse().read())
         west, south, east, north = tilejson["bounds"]
@@ -92,8 +91,7 @@ class LoadTest(unittest.TestCase):
     def xyz_reader(self, tiles, until, latencies, errors):
         """XYZ tiles over HTTP, one keep-alive connection, as a map viewer fetches them."""
         rng = random.Random(len(latencies) + 100)
-        host, port = self.server.http.split("//")[1].rsplit(":", 1)
-        connection = http.client.HTTPConnection(host, int(port), timeout=60)
+        connection = self.server.connection()
         while time.monotonic() < until:
             z, x, y = rng.choice(tiles)
             try:
@@ -106,7 +104,7 @@ class LoadTest(unittest.TestCase):
                     errors.append(f"xyz tile {z}/{x}/{y}: HTTP {reply.status}")
             except (OSError, http.client.HTTPException) as error:
                 errors.append(f"xyz tile {z}/{x}/{y}: {error}")
-                connection = http.client.HTTPConnection(host, int(port), timeout=60)
+                connection = self.server.connection()
 
     def test_uploads_and_tile_reads_while_two_jobs_run(self):
         s = self.server

@@ -8,7 +8,7 @@ import time
 
 import grpc
 
-from bathyslam.errors import JobFailed, Unavailable, error_of
+from bathyslam.errors import JobFailed, NotFound, Unavailable, error_of
 from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc
 
 CHUNK = 1 << 20  # the API's largest chunk
@@ -131,9 +131,8 @@ class Client:
                 if status.complete:
                     return
                 offset = status.committed_bytes
-        except Exception as error:  # NotFound: not begun yet
-            if getattr(error, "code", None) != grpc.StatusCode.NOT_FOUND:
-                raise
+        except NotFound:  # not begun yet
+            pass
 
         def requests():
             with open(path, "rb") as f:
