@@ -312,6 +312,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-finalizes", o.limits.max_finalizes, "FinalizeSurvey calls in progress per tenant on this server")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-http-requests", o.limits.max_http_requests,
+                 "HTTP requests in progress per tenant on this server (a download or event stream until its end)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")
       ->capture_default_str()->check(CLI::Range(1, 10));
   CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");

@@ -194,7 +194,7 @@ Product stored_map(ServiceContext& context, const storage::JobRecord& job, const
 }  // namespace
 
 HttpApi::HttpApi(ServiceContext& context, JobEventBell& bell, const HttpOptions& options)
-    : context_(context), bell_(bell) {
+    : context_(context), bell_(bell), request_slots_(context.limits.max_http_requests) {
   if (options.tls_cert.empty() != options.tls_key.empty()) throw std::runtime_error("--tls-cert and --tls-key go together");
   if (options.tls_cert.empty()) {
     server_ = std::make_unique<httplib::Server>();
@@ -235,17 +235,30 @@ HttpApi::~HttpApi() {
 }
 
 void HttpApi::route(const std::string& pattern, Body body) {
-  // Every route: the caller's tenant first, refusals as JSON {"error": ...} with the status the
-  // gRPC API would give in HTTP's words, and one log line with what was sent.
+  // Every route: the caller's tenant first, then one of its request slots, refusals as JSON
+  // {"error": ...} with the status the gRPC API would give in HTTP's words, and one log line with
+  // what was sent.
   server_->Get(pattern, [this, body](const httplib::Request& req, httplib::Response& res) {
     res.status = 200;
     const grpc::Status status = status_of(("HTTP GET " + req.path).c_str(), [&] {
       const std::string authorization = req.get_header_value("Authorization");
       const std::int64_t tenant =
           tenant_of_authorization(context_, req.has_header("Authorization") ? &authorization : nullptr);
+      auto slot = std::make_shared<StreamSlots::Slot>(
+          slot_or_refuse(request_slots_, tenant, "HTTP requests in progress on this server", "--max-http-requests",
+                         "wait for one to finish"));
       body(req, res, tenant);
+      // A download's or an event stream's bytes go out after this returns, on the same thread:
+      // the slot goes with them (the provider's copies end with the response).
+      if (res.content_provider_) {
+        res.content_provider_ = [send = std::move(res.content_provider_), slot](std::size_t offset, std::size_t length,
+                                                                                  httplib::DataSink& sink) {
+          return send(offset, length, sink);
+        };
+      }
     });
     if (!status.ok()) {
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) res.set_header("Retry-After", "1");
       if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) res.set_header("WWW-Authenticate", "Bearer");
       res.content_provider_ = nullptr;
       send_json(res, {{"error", status.error_message()}}, http_status(status.error_code()));

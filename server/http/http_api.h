@@ -68,6 +68,10 @@ class HttpApi {
   // threads too (up to 5 s each), so this bounds what streams take; it does not reserve the rest.
   StreamSlots event_slots_{8};
   std::atomic<int> event_streams_{0};
+  // Every request of a tenant holds one of its slots (--max-http-requests) while it runs, a
+  // download or an event stream until its last byte is sent: one tenant's slow downloads, streams
+  // or a viewer's many tiles cannot take every thread from the others.
+  StreamSlots request_slots_;
   XyzCache tiles_{256u << 20, 64u << 20};  // maps in memory, drawn tiles
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;

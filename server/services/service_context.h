@@ -23,6 +23,9 @@ struct Limits {
   int max_watch_streams = 64;                            // open WatchJob streams per tenant, per server
   int max_upload_streams = 8;                            // UploadFile streams in progress per tenant, per server
   int max_finalizes = 2;                                 // FinalizeSurvey calls in progress per tenant, per server
+  // HTTP requests in progress per tenant, per server: half the endpoint's 32 threads (an event
+  // stream or a download holds one until its last byte).
+  int max_http_requests = 16;
   int max_attempts = 2;                                  // per job: a crashed worker's job runs once more
   // Cells of one survey's map (1e8: 5 km × 5 km at 0.5 m, 1.2 GB for its three float bands).
   std::uint64_t max_map_cells = 100'000'000;

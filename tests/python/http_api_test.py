@@ -7,6 +7,7 @@ import http.client
 import json
 import os
 import re
+import time
 import unittest
 import urllib.parse
 
@@ -287,6 +288,48 @@ class HttpApiTest(unittest.TestCase):
         again = self.events(job, last_event_id=middle)
         self.assertEqual([e[0] for e in again if e[1] == "progress"], [e[0] for e in progress if e[0] > middle])
         self.assertEqual(again[-1][1], "end")
+
+    def test_a_tenant_cannot_hold_every_thread(self):
+        # A server whose tenants may each have 3 requests in progress and no worker, so that a
+        # job stays queued and its event streams stay open: each holds one of its tenant's slots.
+        s = self.server
+        s.halt()
+        s.args = ["--workers", "0", "--max-http-requests", "3"]
+        s.start()
+        owner = [("authorization", "Bearer " + self.tokens["owner"])]
+        job = s.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=self.survey, configuration="odometry"),
+                               timeout=30, metadata=owner).id
+        streams = []
+        try:
+            for _ in range(3):
+                connection = s.connection()
+                connection.request("GET", f"/v1/jobs/{job}/events", headers={"Authorization": "Bearer " + self.tokens["owner"]})
+                response = connection.getresponse()
+                self.assertEqual(response.status, 200)
+                streams.append(connection)
+            before = database_fingerprint(s.url)
+            status, headers, body = self.get("/v1/surveys")
+            self.assertEqual((status, headers["Retry-After"]), (429, "1"))
+            self.assertIn("3 HTTP requests in progress on this server", json.loads(body)["error"])
+            self.assertEqual(database_fingerprint(s.url), before)
+            self.assertEqual(self.get("/v1/surveys", "another tenant")[0], 200, "another tenant is served")
+            # A stream closed gives its slot back once the server sees the client gone (its
+            # streams look every 2 s).
+            streams.pop().close()
+            statuses = []
+            for _ in range(40):
+                statuses.append(self.get("/v1/surveys")[0])
+                if statuses[-1] == 200:
+                    break
+                time.sleep(0.25)
+            self.assertEqual(statuses[-1], 200, statuses)
+        finally:
+            for connection in streams:
+                connection.close()
+            s.jobs.CancelJob(job_pb2.CancelJobRequest(job_id=job), timeout=30, metadata=owner)
+            s.halt()
+            s.args = ["--http", "127.0.0.1:0"]
+            s.start()
 
     def test_malformed_paths(self):
         for path, code in ((f"/v1/jobs/{self.job}/../../../etc/passwd", 404), ("/v1/jobs/0", 400),
