@@ -13,11 +13,6 @@ Eigen::Matrix3d heading_rotation(const Eigen::Matrix3d& rotation) {
   return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
 }
 
-// (Σ over m in [lo, hi)) of a prefix-summed quantity.
-Eigen::Matrix3d range_sum(const std::vector<Eigen::Matrix3d>& prefix, int lo, int hi) {
-  return prefix[hi] - prefix[lo];
-}
-
 }  // namespace
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
@@ -38,26 +33,53 @@ Eigen::Isometry3d between_level_frames(const Eigen::Isometry3d& relative, const 
   return level_frame(from_pose).inverse() * from_pose * relative * to_pose.inverse() * level_frame(to_pose);
 }
 
+void DrNoiseModel::StepSums::add(const Eigen::Matrix3d& step_qt, const Eigen::Matrix3d& step_qr, const Eigen::Matrix3d& s) {
+  qt += step_qt;
+  qr += step_qr;
+  s_qr += s * step_qr;
+  s_qr_s += s * step_qr * s.transpose();
+}
+
+DrNoiseModel::StepSums& DrNoiseModel::StepSums::operator+=(const StepSums& other) {
+  qt += other.qt;
+  qr += other.qr;
+  s_qr += other.s_qr;
+  s_qr_s += other.s_qr_s;
+  return *this;
+}
+
+DrNoiseModel::StepSums DrNoiseModel::StepSums::operator-(const StepSums& other) const {
+  StepSums d = *this;
+  d.qt -= other.qt;
+  d.qr -= other.qr;
+  d.s_qr -= other.s_qr;
+  d.s_qr_s -= other.s_qr_s;
+  return d;
+}
+
 DrNoiseModel::DrNoiseModel(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& config) {
   const int n = static_cast<int>(dead_reckoning.size());
   for (const Eigen::Isometry3d& pose : dead_reckoning) level_.push_back(level_frame(pose));
   origin_ = n > 0 ? Eigen::Vector3d(level_[0].translation()) : Eigen::Vector3d::Zero();
-  const Eigen::Matrix3d sigma_t = config.dr_sigma_translation_m.cwiseAbs2().asDiagonal();
-  const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
-  sum_qt_.assign(std::max(n, 1), zero);
-  sum_qr_.assign(std::max(n, 1), zero);
-  sum_s_qr_.assign(std::max(n, 1), zero);
-  sum_s_qr_s_.assign(std::max(n, 1), zero);
+  const auto in_map_axes = [&](const Eigen::Vector3d& sigma, int node) {
+    const Eigen::Matrix3d& heading = level_[node].linear();
+    return Eigen::Matrix3d(heading * Eigen::Matrix3d(sigma.cwiseAbs2().asDiagonal()) * heading.transpose());
+  };
+  prefix_.assign(std::max(n, 1), StepSums{});
+  start_of_.assign(std::max(n, 1), 0);
   for (int m = 0; m + 1 < n; ++m) {
-    const Eigen::Matrix3d& heading = level_[m].linear();
-    const Eigen::Matrix3d qt = heading * sigma_t * heading.transpose();
-    const Eigen::Matrix3d sigma_r = config.rotation_sigma_of_step(m).cwiseAbs2().asDiagonal();
-    const Eigen::Matrix3d qr = heading * sigma_r * heading.transpose();
-    const Eigen::Matrix3d s = skew(level_[m + 1].translation() - origin_);
-    sum_qt_[m + 1] = sum_qt_[m] + qt;
-    sum_qr_[m + 1] = sum_qr_[m] + qr;
-    sum_s_qr_[m + 1] = sum_s_qr_[m] + s * qr;
-    sum_s_qr_s_[m + 1] = sum_s_qr_s_[m] + s * qr * s.transpose();
+    prefix_[m + 1] = prefix_[m];
+    start_of_[m + 1] = config.has_step(m) ? start_of_[m] : m + 1;
+    if (!config.has_step(m)) continue;  // node m + 1 starts another survey
+    prefix_[m + 1].add(in_map_axes(config.dr_sigma_translation_m, m), in_map_axes(config.rotation_sigma_of_step(m), m),
+                       skew(level_[m + 1].translation() - origin_));
+  }
+  // A datum edge's noise is both start fixes' (datum_information), in node 0's frame as the edge's.
+  for (int start : config.survey_starts) {
+    if (start <= 0 || start >= n) continue;
+    StepSums& datum = datum_[start];
+    datum.add(2 * in_map_axes(config.start_sigma_translation_m, 0), 2 * in_map_axes(config.start_sigma_rotation_rad, 0),
+              skew(level_[start].translation() - origin_));
   }
 }
 
@@ -65,9 +87,17 @@ Eigen::Isometry3d DrNoiseModel::relative_pose(int from, int to) const {
   return level_.at(from).inverse() * level_.at(to);
 }
 
+DrNoiseModel::StepSums DrNoiseModel::path_from_datum(int node) const {
+  const int start = start_of_[node];
+  StepSums path = prefix_[node] - prefix_[start];
+  if (const auto datum = datum_.find(start); datum != datum_.end()) path += datum->second;
+  return path;
+}
+
 // In map axes, holding `from` fixed, step m's noise (translation w_t, rotation w_r) moves `to`
 // by w_t + w_r × d_m and turns it by w_r, d_m = p_to − s_m, whichever side of the step `from`
-// lies on. With D = [p_to]ₓ and S_m = [s_m]ₓ, [d_m]ₓ = D − S_m, and summed over the steps
+// lies on. With D = [p_to]ₓ and S_m = [s_m]ₓ, [d_m]ₓ = D − S_m, and summed over the steps between
+// them (along one survey's chain, or from each through its survey's start to the datum)
 //   translation:  Σ Qt + Σ (D − S)Qr(D − S)ᵀ = Σ Qt + D ΣQr Dᵀ − D (ΣSQr)ᵀ − ΣSQr Dᵀ + ΣSQrSᵀ
 //   cross:        −Σ (D − S)Qr = ΣSQr − D ΣQr
 //   rotation:     Σ Qr
@@ -75,17 +105,21 @@ Eigen::Isometry3d DrNoiseModel::relative_pose(int from, int to) const {
 Covariance6 DrNoiseModel::covariance(int from, int to) const {
   const int lo = std::min(from, to), hi = std::max(from, to);
   if (lo < 0 || hi >= size()) throw std::out_of_range("DrNoiseModel: node out of range");
-  const Eigen::Matrix3d qt = range_sum(sum_qt_, lo, hi);
-  const Eigen::Matrix3d qr = range_sum(sum_qr_, lo, hi);
-  const Eigen::Matrix3d s_qr = range_sum(sum_s_qr_, lo, hi);
-  const Eigen::Matrix3d s_qr_s = range_sum(sum_s_qr_s_, lo, hi);
+  StepSums steps;
+  if (start_of_[lo] == start_of_[hi]) {
+    steps = prefix_[hi] - prefix_[lo];
+  } else {
+    steps = path_from_datum(lo);
+    steps += path_from_datum(hi);
+  }
   const Eigen::Matrix3d d = skew(level_[to].translation() - origin_);
 
   Covariance6 map_axes;
-  map_axes.topLeftCorner<3, 3>() = qt + d * qr * d.transpose() - d * s_qr.transpose() - s_qr * d.transpose() + s_qr_s;
-  map_axes.topRightCorner<3, 3>() = s_qr - d * qr;
+  map_axes.topLeftCorner<3, 3>() =
+      steps.qt + d * steps.qr * d.transpose() - d * steps.s_qr.transpose() - steps.s_qr * d.transpose() + steps.s_qr_s;
+  map_axes.topRightCorner<3, 3>() = steps.s_qr - d * steps.qr;
   map_axes.bottomLeftCorner<3, 3>() = map_axes.topRightCorner<3, 3>().transpose();
-  map_axes.bottomRightCorner<3, 3>() = qr;
+  map_axes.bottomRightCorner<3, 3>() = steps.qr;
 
   Covariance6 to_level = Covariance6::Zero();
   to_level.topLeftCorner<3, 3>() = level_[from].linear().transpose();

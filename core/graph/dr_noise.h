@@ -6,6 +6,7 @@
 // (relative_pose_error.h): between the level frames of the two nodes (heading only, z the true
 // vertical), a perturbed pose is (exp(δθ)·R, t + δt) with δt and δθ in `from`'s level frame,
 // ordered δt x, y, z then δθ about x, y, z (yaw last).
+#include <map>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -33,7 +34,9 @@ Eigen::Isometry3d between_level_frames(const Eigen::Isometry3d& relative, const 
 // independent noise of GraphConfig's DR sigmas (translation in the step's level frame, rotation),
 // propagated to first order: a heading error at a step turns everything after it about the node
 // it leads to, so a later position moves sideways by its distance from there times the angle.
-// Prefix sums make a query O(1) after an O(n) construction.
+// Prefix sums make a query O(1) after an O(n) construction. With several surveys
+// (GraphConfig::survey_starts) the steps form a tree: each survey's chain hangs off node 0 by its
+// datum edge, and two surveys' nodes are joined through their starts and the datum.
 class DrNoiseModel {
  public:
   DrNoiseModel(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& config);
@@ -45,12 +48,24 @@ class DrNoiseModel {
   Covariance6 covariance(int from, int to) const;
 
  private:
+  // Of a set of steps (step m joins node m to m + 1, its rotation turning everything beyond about
+  // node m + 1 at s_m): Σ Qt, Σ Qr, Σ [s]ₓQr, Σ [s]ₓQr[s]ₓᵀ, Qt and Qr the step's translation and
+  // rotation covariances in map axes.
+  struct StepSums {
+    Eigen::Matrix3d qt = Eigen::Matrix3d::Zero(), qr = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d s_qr = Eigen::Matrix3d::Zero(), s_qr_s = Eigen::Matrix3d::Zero();
+    void add(const Eigen::Matrix3d& step_qt, const Eigen::Matrix3d& step_qr, const Eigen::Matrix3d& s);
+    StepSums& operator+=(const StepSums& other);
+    StepSums operator-(const StepSums& other) const;
+  };
+  // The steps from node `node`'s survey start to it, and that start's datum edge.
+  StepSums path_from_datum(int node) const;
+
   std::vector<Eigen::Isometry3d> level_;  // DR poses, level frames
   Eigen::Vector3d origin_;                // positions are taken from here, to keep the sums small
-  // Sums over steps m < k (step m joins node m to m + 1, its rotation turning everything beyond
-  // about node m + 1 at s_m): Σ Qt, Σ Qr, Σ [s]ₓQr, Σ [s]ₓQr[s]ₓᵀ, Qt and Qr the step's translation
-  // and rotation covariances in map axes.
-  std::vector<Eigen::Matrix3d> sum_qt_, sum_qr_, sum_s_qr_, sum_s_qr_s_;
+  std::vector<StepSums> prefix_;          // over steps m < k
+  std::vector<int> start_of_;             // each node's survey start (0 for the first survey)
+  std::map<int, StepSums> datum_;         // each later survey start's datum edge
 };
 
 // The same for one query, building the model: O(n).

@@ -1,6 +1,7 @@
 #include "core/graph/pose_graph.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <ceres/ceres.h>
 
@@ -44,6 +45,20 @@ Information6 information_from_sigmas(const Eigen::Vector3d& translation_m,
 
 Information6 odometry_information(const GraphConfig& config, int k) {
   return information_from_sigmas(config.dr_sigma_translation_m, config.rotation_sigma_of_step(k));
+}
+
+bool GraphConfig::has_step(int k) const {
+  return !std::binary_search(survey_starts.begin(), survey_starts.end(), k + 1);
+}
+
+bool GraphConfig::same_survey(int a, int b) const {
+  return std::upper_bound(survey_starts.begin(), survey_starts.end(), a) ==
+         std::upper_bound(survey_starts.begin(), survey_starts.end(), b);
+}
+
+Information6 datum_information(const GraphConfig& config) {
+  return information_from_sigmas(std::sqrt(2.0) * config.start_sigma_translation_m,
+                                 std::sqrt(2.0) * config.start_sigma_rotation_rad);
 }
 
 std::vector<PoseGraphEdge> odometry_edges(const std::vector<Eigen::Isometry3d>& dead_reckoning,

@@ -76,6 +76,18 @@ struct GraphConfig {
     return jump == step_yaw_sigma_rad.end() ? dr_sigma_rotation_rad
                                             : Eigen::Vector3d(dr_sigma_rotation_rad.x(), dr_sigma_rotation_rad.y(), jump->second);
   }
+  // Several surveys of one site in one graph: the first node of each survey after the first.
+  // No odometry step leads into one; each hangs off node 0, the first survey's first pose (the
+  // datum), by a datum edge whose noise is both surveys' start fixes (a GPS fix before the dive).
+  // Empty: one survey. Not a --set field: the job's surveys give it.
+  std::vector<int> survey_starts;
+  // A survey's start fix: where its dead reckoning began, as the vehicle knew it (x, y, depth;
+  // roll, pitch, heading). A surface GPS fix is good to a few metres; the heading is the INS's.
+  Eigen::Vector3d start_sigma_translation_m{3.0, 3.0, 0.5};
+  Eigen::Vector3d start_sigma_rotation_rad{1e-3, 1e-3, 0.02};
+  // Whether an odometry step leads from node k to k + 1 (not into another survey's start).
+  bool has_step(int k) const;
+  bool same_survey(int a, int b) const;
   RobustKernel robust_kernel = RobustKernel::huber;
   double huber_delta = 1.0;  // on whitened residuals
   // DCS's Φ, on the squared whitened residual: below it an edge keeps its full weight. χ²₆ at
@@ -87,6 +99,8 @@ struct GraphConfig {
   void fields(Field&& field) {
     xyz("dr_sigma_translation_m", dr_sigma_translation_m, 1e-4, 1e3, field);
     rpy("dr_sigma_rotation_rad", dr_sigma_rotation_rad, 1e-8, 10, field);
+    xyz("start_sigma_translation_m", start_sigma_translation_m, 1e-4, 1e4, field);
+    rpy("start_sigma_rotation_rad", start_sigma_rotation_rad, 1e-8, 10, field);
     field("robust_kernel", robust_kernel, 0, 1);  // 0 huber, 1 dcs
     field("huber_delta", huber_delta, 1e-3, 1e3);
     field("dcs_phi", dcs_phi, 1e-3, 1e6);
@@ -96,6 +110,10 @@ struct GraphConfig {
 
 // The information of the odometry step from node `k` under `config`'s DR sigmas.
 Information6 odometry_information(const GraphConfig& config, int k);
+
+// The information of a datum edge (node 0 to another survey's first node): the two start fixes'
+// noise, independent, added.
+Information6 datum_information(const GraphConfig& config);
 
 struct GraphSolution {
   std::vector<Eigen::Isometry3d> poses;

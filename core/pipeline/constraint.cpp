@@ -12,12 +12,13 @@ std::string to_string(ConstraintType t) {
     case ConstraintType::kOdometry: return "odometry";
     case ConstraintType::kAdjacent: return "adjacent";
     case ConstraintType::kLoop: return "loop";
+    case ConstraintType::kDatum: return "datum";
   }
   return "?";
 }
 
 ConstraintType parse_constraint_type(const std::string& text) {
-  for (ConstraintType t : {ConstraintType::kOdometry, ConstraintType::kAdjacent, ConstraintType::kLoop}) {
+  for (ConstraintType t : {ConstraintType::kOdometry, ConstraintType::kAdjacent, ConstraintType::kLoop, ConstraintType::kDatum}) {
     if (text == to_string(t)) return t;
   }
   throw std::invalid_argument("constraint type '" + text + "' is not known to this version of the core");
@@ -93,11 +94,21 @@ Information6 without_direction(const Information6& information, const Eigen::Vec
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph) {
   std::vector<Constraint> constraints;
   for (const PoseGraphEdge& e : odometry_edges(dead_reckoning, Information6::Identity())) {
+    if (!graph.has_step(e.from)) continue;
     Constraint c;
     c.from = e.from;
     c.to = e.to;
     c.measured = e.measured;
     c.information = odometry_information(graph, e.from);
+    constraints.push_back(c);
+  }
+  for (int start : graph.survey_starts) {
+    Constraint c;
+    c.type = ConstraintType::kDatum;
+    c.from = 0;
+    c.to = start;
+    c.measured = dead_reckoning.at(0).inverse() * dead_reckoning.at(start);
+    c.information = datum_information(graph);
     constraints.push_back(c);
   }
   return constraints;

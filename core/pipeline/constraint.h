@@ -15,8 +15,12 @@
 
 namespace bathyslam {
 
-enum class ConstraintType { kOdometry, kAdjacent, kLoop };
+// kDatum: another survey's first submap held to the first survey's by both start fixes
+// (GraphConfig::survey_starts), a prior as odometry is.
+enum class ConstraintType { kOdometry, kAdjacent, kLoop, kDatum };
 std::string to_string(ConstraintType type);
+// Odometry and datum edges: the navigation's own word, not a registration.
+inline bool from_navigation(ConstraintType type) { return type == ConstraintType::kOdometry || type == ConstraintType::kDatum; }
 ConstraintType parse_constraint_type(const std::string& text);  // throws std::invalid_argument
 
 // What the DR prior said of the uniqueness probe's alternative alignment (robust_backend.h,
@@ -101,8 +105,8 @@ Information6 with_horizontal_spread(Information6 information, const Eigen::Matri
 // along it marginalised out, so that what is left holds whatever the offset there.
 Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction);
 
-// Odometry constraints: consecutive submaps, DR relative pose, the graph's DR information
-// (Table 1's by default).
+// Odometry constraints: consecutive submaps of one survey, DR relative pose, the graph's DR
+// information (Table 1's by default); and each later survey's datum edge from node 0.
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph);
 
 }  // namespace bathyslam

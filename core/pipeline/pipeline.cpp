@@ -97,19 +97,22 @@ int first_node_changed(const std::vector<Constraint>& constraints, std::vector<c
 // small, even with its aliases as a wrapped likelihood) and the gates built on that would rule
 // out the true alignment. Nor does an alias's scatter count as a registration's noise: it is a
 // bound on where the answer may be, and counted as noise it made every sand-wave survey's
-// navigation look perfect.
-bool observes_drift(const Constraint& c, const Plan& plan) {
-  if (c.type == ConstraintType::kOdometry || (c.rejection.rejected() && !refused_by_prior(c.rejection, plan))) return false;
+// navigation look perfect. A registration across two surveys observes their start fixes too,
+// whose noise is not estimated: it stays out.
+bool observes_drift(const Constraint& c, const Plan& plan, const GraphConfig& graph) {
+  if (from_navigation(c.type) || (c.rejection.rejected() && !refused_by_prior(c.rejection, plan))) return false;
+  if (!graph.same_survey(c.from, c.to)) return false;
   if (!carries_horizontal_information(c.registered_information)) return false;
   const bool widened = c.horizontal_spread.trace() > 0;
   return widened || (c.uniqueness.unique() && c.horizontal_doubt.empty());
 }
 
 std::vector<DrInnovation> dr_innovations(const std::vector<Constraint>& constraints, const DrNoiseModel& dr,
-                                         const std::vector<Eigen::Isometry3d>& dr_poses, const Plan& plan) {
+                                         const std::vector<Eigen::Isometry3d>& dr_poses, const Plan& plan,
+                                         const GraphConfig& graph) {
   std::vector<DrInnovation> innovations;
   for (const Constraint& c : constraints) {
-    if (!observes_drift(c, plan)) continue;
+    if (!observes_drift(c, plan, graph)) continue;
     innovations.push_back(dr_innovation({c.from, c.to, c.measured, c.registered_information, true, c.anchor}, dr, dr_poses));
   }
   return innovations;
@@ -125,11 +128,11 @@ class NavigationNoiseTracker {
   void update(PipelineResult& r, DrNoiseModel& dr, PairDistances& pair_distances, const Plan& plan, bool last) {
     // Counted first: the innovations themselves are built only when an estimate is due.
     const auto count = static_cast<double>(std::count_if(r.constraints.begin(), r.constraints.end(),
-                                                         [&](const Constraint& c) { return observes_drift(c, plan); }));
+                                                         [&](const Constraint& c) { return observes_drift(c, plan, config_.graph); }));
     if (count < config_.navigation_noise.min_registrations || (!last && count < 1.25 * estimated_from_)) return;
     if (count == estimated_from_) return;
     estimated_from_ = count;
-    r.navigation_noise = estimate_navigation_noise(r.dr_poses, dr_innovations(r.constraints, dr, r.dr_poses, plan),
+    r.navigation_noise = estimate_navigation_noise(r.dr_poses, dr_innovations(r.constraints, dr, r.dr_poses, plan, config_.graph),
                                                    config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(r.dr_poses, graph);
@@ -166,7 +169,9 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
     for (int s = std::max(begin, 1); s < end; ++s) {
-      estimate[s] = estimate[s - 1] * (r.dr_poses[s - 1].inverse() * r.dr_poses[s]);
+      // Another survey's start is predicted from the datum, as its navigation placed it.
+      const int previous = config.graph.has_step(s - 1) ? s - 1 : 0;
+      estimate[s] = estimate[previous] * (r.dr_poses[previous].inverse() * r.dr_poses[s]);
     }
     const std::vector<Candidate> candidates = candidates_ending_in(r.submaps, estimate, begin, end, config.candidates, plan);
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
@@ -216,6 +221,7 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
   PipelineResult r;
   r.footprint_scale = footprint_scale(built.footprint, given);
   r.config = scaled_to_footprint(given, r.footprint_scale);
+  r.config.graph.survey_starts = built.survey_starts;
   const PipelineConfig& config = r.config;
   const Plan plan = plan_of(config);
   r.navigation_noise.graph = config.graph;

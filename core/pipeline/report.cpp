@@ -75,7 +75,7 @@ std::map<std::string, ConstraintCounts> counts_from_json(const nlohmann::json& j
 nlohmann::json registrations_json(const PipelineResult& r) {
   nlohmann::json list = nlohmann::json::array();
   for (const Constraint& c : r.constraints) {
-    if (c.type == ConstraintType::kOdometry) continue;
+    if (from_navigation(c.type)) continue;
     nlohmann::json j = {{"type", to_string(c.type)},
                         {"from", c.from},
                         {"to", c.to},
@@ -291,7 +291,7 @@ std::string report_text(const PipelineResult& r) {
   const ErrorStats& c0 = r.dr_consistency.stats;
   std::size_t registrations = 0, accepted = 0;
   for (const Constraint& k : r.constraints) {
-    if (k.type == ConstraintType::kOdometry) continue;
+    if (from_navigation(k.type)) continue;
     ++registrations;
     accepted += k.in_graph() ? 1 : 0;
   }

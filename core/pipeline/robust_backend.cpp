@@ -12,7 +12,7 @@ namespace bathyslam {
 namespace {
 
 PoseGraphEdge edge_of(const Constraint& c) {
-  return {c.from, c.to, c.measured, c.information, c.type != ConstraintType::kOdometry, c.anchor};
+  return {c.from, c.to, c.measured, c.information, !from_navigation(c.type), c.anchor};
 }
 
 // How hard an edge pulls against a solution, in sigmas of its own information on x, y and yaw.
@@ -28,7 +28,7 @@ void publish_dead_reckoning(PipelineResult& r) {
   r.graph.poses = r.dr_poses;
   r.optimized_poses = r.dr_poses;
   for (Constraint& c : r.constraints) {
-    if (c.type != ConstraintType::kOdometry && c.in_graph()) c.exclusion = {RejectionKind::kSafetyNet, "dead reckoning published instead"};
+    if (!from_navigation(c.type) && c.in_graph()) c.exclusion = {RejectionKind::kSafetyNet, "dead reckoning published instead"};
   }
 }
 
@@ -151,7 +151,7 @@ bool refused_by_prior(const Rejection& rejection, const Plan& plan) {
 
 void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                       const PipelineConfig& config, const Plan& plan) {
-  if (c.type == ConstraintType::kOdometry) return;
+  if (from_navigation(c.type)) return;
   // With the alias rule on, acceptance leaves the uniqueness test to resolve_alias: every
   // kNotUnique is the prior's, as every kImplausible is.
   if (refused_by_prior(c.rejection, plan)) c.rejection = {};
@@ -175,7 +175,7 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
   std::vector<LoopCandidate> candidates;
   for (std::size_t k = 0; k < constraints.size(); ++k) {
     Constraint& c = constraints[k];
-    if (c.type == ConstraintType::kOdometry) continue;
+    if (from_navigation(c.type)) continue;
     if (c.exclusion.kind == RejectionKind::kInconsistent) c.exclusion = {};
     if (!c.in_graph() || !carries_horizontal_information(c.information)) continue;
     owner.push_back(k);

@@ -45,6 +45,8 @@ struct SubmapSet {
   std::vector<Submap> submaps;
   std::size_t pings_dropped = 0;   // outside the navigation's time span (sync)
   SoundingFootprint footprint;     // of every ping given to the builder; 0 for submaps made by hand
+  // Several surveys of one site (join_surveys): the first submap of each survey after the first.
+  std::vector<int> survey_starts;
 };
 
 // How to split a survey of this footprint into lines: the lake's course window and shortest line

@@ -200,7 +200,7 @@ void ResultStore::save_constraints(std::int64_t job_id, const std::vector<Constr
   check_fence(*connection, job_id);
   for (std::size_t i = 0; i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
-    if ((c.type == ConstraintType::kOdometry) == c.path.has_value())
+    if (from_navigation(c.type) == c.path.has_value())
       throw std::invalid_argument("constraint " + std::to_string(i) +
                                   ": odometry constraints have no registration path, registrations need one");
     connection->exec(insert, constraint_row(job_id, i, c));

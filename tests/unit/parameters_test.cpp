@@ -108,6 +108,7 @@ TEST(Parameters, EveryFieldOfTheConfigurationIsAParameter) {
   };
   cover(&a->configuration, sizeof a->configuration);  // the preset's name, not a parameter
   cover(&a->graph.step_yaw_sigma_rad, sizeof a->graph.step_yaw_sigma_rad);  // found in the survey, not set
+  cover(&a->graph.survey_starts, sizeof a->graph.survey_starts);  // the job's surveys, not set
   std::vector<std::string> names;
   a->fields([&](std::string_view name, auto& field, double min, double max) {
     names.emplace_back(name);

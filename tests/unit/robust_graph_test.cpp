@@ -90,6 +90,49 @@ TEST(DrNoise, CovarianceMatchesMonteCarloOfNoisyChains) {
   }
 }
 
+// Two surveys of one site: the second's chain hangs off node 0 by its datum edge (both start
+// fixes), so nodes of the two surveys are joined through their starts, never through the end of
+// the first survey's chain. Against Monte Carlo as above.
+TEST(DrNoise, SecondSurveyHangsOffTheDatumByItsStartFixes) {
+  std::vector<Eigen::Isometry3d> dr = out_and_back(8);  // nodes 0-15
+  for (int i = 0; i < 10; ++i) dr.push_back(pose(10.0 + 20.0 * i * std::cos(0.3), 15.0 + 20.0 * i * std::sin(0.3), 0.3));
+  GraphConfig config;
+  config.dr_sigma_translation_m = {0.5, 0.5, 0.1};
+  config.dr_sigma_rotation_rad = {1e-4, 1e-4, 5e-3};
+  config.survey_starts = {16};
+  const DrNoiseModel model(dr, config);
+  const std::vector<std::pair<int, int>> pairs = {{3, 20}, {20, 3}, {15, 25}, {17, 24}, {0, 16}};
+  std::vector<std::vector<Vector6>> errors(pairs.size());
+  std::mt19937 rng(5);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (int sample = 0; sample < 20000; ++sample) {
+    std::vector<Eigen::Isometry3d> first(dr.begin(), dr.begin() + 16), second(dr.begin() + 16, dr.end());
+    std::vector<Eigen::Isometry3d> chain = noisy_chain(first, config, rng);
+    Vector6 fix;
+    for (int k = 0; k < 3; ++k) fix(k) = std::sqrt(2.0) * config.start_sigma_translation_m(k) * unit(rng);
+    for (int k = 0; k < 3; ++k) fix(3 + k) = std::sqrt(2.0) * config.start_sigma_rotation_rad(k) * unit(rng);
+    const Eigen::Isometry3d start = chain[0] * perturbed(dr[0].inverse() * dr[16], fix);
+    for (const Eigen::Isometry3d& p : noisy_chain(second, config, rng)) chain.push_back(start * second[0].inverse() * p);
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const auto [from, to] = pairs[k];
+      errors[k].push_back(pose_difference(chain[from].inverse() * chain[to], model.relative_pose(from, to)));
+    }
+  }
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    Covariance6 sample = Covariance6::Zero();
+    for (const Vector6& e : errors[k]) sample += e * e.transpose() / errors[k].size();
+    const Eigen::LLT<Covariance6> llt(model.covariance(pairs[k].first, pairs[k].second));
+    const Covariance6 inverse_root = llt.matrixL().solve(Covariance6::Identity());
+    const Eigen::SelfAdjointEigenSolver<Covariance6> whitened(inverse_root * sample * inverse_root.transpose());
+    EXPECT_GT(whitened.eigenvalues().minCoeff(), 0.93) << pairs[k].first << "->" << pairs[k].second;
+    EXPECT_LT(whitened.eigenvalues().maxCoeff(), 1.07) << pairs[k].first << "->" << pairs[k].second;
+  }
+  // Within the second survey, as a chain of its own: no trace of the first survey's drift.
+  const DrNoiseModel alone(std::vector<Eigen::Isometry3d>(dr.begin() + 16, dr.end()), GraphConfig{config.dr_sigma_translation_m,
+                                                                                                   config.dr_sigma_rotation_rad});
+  EXPECT_TRUE(model.covariance(17, 24).isApprox(alone.covariance(1, 8), 1e-9));
+}
+
 TEST(DrNoise, OneStepIsTheStepNoiseAndNoStepIsNone) {
   const std::vector<Eigen::Isometry3d> dr = out_and_back(5);
   const GraphConfig config;
