@@ -20,6 +20,7 @@
 #include "core/pipeline/report.h"
 #include "core/products/corrected_gsf.h"
 #include "core/products/map_products.h"
+#include "core/submaps/joined_surveys.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -60,13 +61,45 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
   }
 }
 
+// Several bundles: several surveys of one site, each read alone, joined into one graph
+// (join_surveys); the map's cells the finest any of them asks for. Every survey must share the
+// first one's CRS.
+JobInput read_site(const ProcessOptions& o, const PipelineConfig& config, std::vector<Survey>& surveys) {
+  std::vector<SubmapSet> parts;
+  JobInput joined;
+  for (const std::string& path : o.survey.inputs) {
+    SurveyOptions one = o.survey;
+    one.inputs = {path};
+    JobInput input = read_job_input([&](PingSink& sink) { return load_survey(one.input(), sink).survey; }, config, o.fuse);
+    if (!surveys.empty() && input.survey.metadata.crs != surveys.front().metadata.crs) {
+      throw std::runtime_error(path + ": survey.json: crs " + input.survey.metadata.crs + " is not the first survey's (" +
+                               surveys.front().metadata.crs + "): surveys of one site share a CRS");
+    }
+    joined.fuse = surveys.empty() || input.fuse.resolution_m < joined.fuse.resolution_m ? input.fuse : joined.fuse;
+    joined.pings += input.pings;
+    joined.read_seconds += input.read_seconds;
+    parts.push_back(std::move(input.submaps));
+    surveys.push_back(std::move(input.survey));
+  }
+  joined.submaps = join_surveys(std::move(parts));
+  joined.survey = surveys.front();
+  return joined;
+}
+
+bool is_site(const ProcessOptions& o) {
+  return o.survey.inputs.size() > 1 && std::filesystem::is_directory(o.survey.inputs.front());
+}
+
 void run_process(const ProcessOptions& o) {
   PipelineConfig config = configuration_of(o.config, overrides_of(o.sets));
   config.threads = o.threads;
 
   const auto start = std::chrono::steady_clock::now();
   // Nothing reads the soundings again but --export-gsf, which reads the input again.
-  JobInput input = read_job_input([&](PingSink& sink) { return load_survey(o.survey.input(), sink).survey; }, config, o.fuse);
+  std::vector<Survey> site;
+  JobInput input = is_site(o) ? read_site(o, config, site)
+                              : read_job_input([&](PingSink& sink) { return load_survey(o.survey.input(), sink).survey; },
+                                               config, o.fuse);
   const Survey& survey = input.survey;
   const FuseConfig& fuse = input.fuse;
   std::string last_stage;
@@ -84,6 +117,10 @@ void run_process(const ProcessOptions& o) {
   std::filesystem::create_directories(o.out);
   const std::vector<NavSample> corrected = corrected_navigation(survey, result);
   write_nav_csv(corrected, std::filesystem::path(o.out) / "trajectory.csv");
+  for (std::size_t k = 1; k < site.size(); ++k) {  // the first survey's is trajectory.csv
+    write_nav_csv(corrected_navigation(site[k], result, static_cast<int>(k)),
+                  std::filesystem::path(o.out) / ("trajectory." + std::to_string(k + 1) + ".csv"));
+  }
   const nlohmann::json report = report_json(result);
   {
     const std::filesystem::path path = std::filesystem::path(o.out) / "report.json";
@@ -96,7 +133,7 @@ void run_process(const ProcessOptions& o) {
   const std::string map_files = write_map_products(result, survey.metadata, fuse, o.out).summary();
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
-  if (o.export_gsf) export_gsf(o, survey, result, corrected);
+  if (o.export_gsf && site.empty()) export_gsf(o, survey, result, corrected);
   if (o.export_soundings) {
     const std::uint64_t n =
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");

@@ -23,6 +23,7 @@ struct SimulateOptions {
   std::optional<double> altitude_m;
   std::optional<double> wavelength_m;
   std::optional<double> wave_angle_deg;
+  int epoch = 0;
   std::string format = "bundle";
   std::string out;
 };
@@ -75,6 +76,7 @@ void run_simulate(const SimulateOptions& o) {
   config.terrain.sand_crest_angle_fixed_deg = o.wave_angle_deg;
   config.line_spacing_m = o.line_spacing_m;
   config.altitude_m = o.altitude_m;
+  config.epoch = o.epoch;
 
   const auto start = std::chrono::steady_clock::now();
   const sim::Simulation simulation = sim::simulate(config);
@@ -95,6 +97,13 @@ void run_simulate(const SimulateOptions& o) {
   }
   std::printf("  %zu pings, %zu soundings, %zu navigation samples\n", s.pings.size(),
               s.beams.size(), s.nav.size());
+  if (o.epoch > 0) {
+    const auto& site = s.metadata.vehicle["simulation"]["site"];
+    std::printf("  epoch %d of the site of seed %llu: start fix off by (%.2f, %.2f) m and %.2f deg, %zu seabed changes since epoch 1\n",
+                o.epoch, static_cast<unsigned long long>(o.seed), site["start_fix_error"]["x_m"].get<double>(),
+                site["start_fix_error"]["y_m"].get<double>(), site["start_fix_error"]["heading_rad"].get<double>() * 180 / M_PI,
+                site["changes_since_epoch_1"].size());
+  }
   print_drift_model(config, simulation, o.sigma_yaw_rad > 0);
   std::printf("  DR error: mean %.2f m, rms %.2f m, max %.2f m, end %.2f m over %.0f m travelled\n",
               simulation.drift.mean_m, simulation.drift.rms_m, simulation.drift.max_m,
@@ -136,6 +145,10 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--sigma-yaw", options->sigma_yaw_rad,
                   "paper model: yaw noise per submap in rad (default: calibrated)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--epoch", options->epoch,
+                  "the site's k-th survey (1, 2, ...): the same seabed, changed after epoch 1, flown on other lines with "
+                  "its own drift and start fix; 0: a survey alone")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--format", options->format,
                   "bundle (nav.csv, pings.csv, ...) or gsf (survey.gsf and reference_nav.csv)")
       ->check(CLI::IsMember({"bundle", "gsf"}))

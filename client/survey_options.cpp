@@ -12,7 +12,7 @@ SurveyInput SurveyOptions::input() const {
 
 void add_survey_options(CLI::App* cmd, SurveyOptions& options) {
   cmd->add_option("survey", options.inputs,
-                  "a survey bundle (a folder or a .tar of one), or one or more sonar files of one format in time order (.gsf, Kongsberg EM .all, or XTF from R2Sonic)")
+                  "a survey bundle (a folder or a .tar of one), or one or more sonar files of one format in time order (.gsf, Kongsberg EM .all, or XTF from R2Sonic); process: several bundle folders are several surveys of one site, in one graph")
       ->required();
   cmd->add_option("--crs", options.crs, "sonar files: projected CRS of the map frame (default: the data's UTM zone)");
   cmd->add_option("--reference-nav", options.reference_nav, "sonar files: reference navigation in the nav.csv format");

@@ -1,6 +1,7 @@
 #include "core/pipeline/report.h"
 
 #include <cstdio>
+#include <optional>
 
 #include "core/eval/plots.h"
 #include "core/io/file_bytes.h"
@@ -246,6 +247,59 @@ nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
 
 }  // namespace
 
+// Several surveys in one graph: each survey's submaps, its trajectory error (when every submap
+// has a reference) and the registrations between it and the others.
+struct SurveyPart {
+  int first = 0, count = 0;
+  std::optional<ErrorStats> trajectory, trajectory_dr;
+  int cross_accepted = 0, cross_registered = 0;  // registrations with another survey's submap
+};
+
+std::vector<SurveyPart> survey_parts(const PipelineResult& r) {
+  std::vector<SurveyPart> parts;
+  const std::vector<int>& starts = r.submaps.survey_starts;
+  if (starts.empty()) return parts;
+  const int n = static_cast<int>(r.submaps.submaps.size());
+  const bool every_reference = static_cast<int>(r.trajectory_errors.size()) == n;
+  for (std::size_t k = 0; k <= starts.size(); ++k) {
+    SurveyPart part;
+    part.first = k == 0 ? 0 : starts[k - 1];
+    part.count = (k < starts.size() ? starts[k] : n) - part.first;
+    if (every_reference) {
+      const auto slice = [&](const std::vector<double>& e) {
+        return error_stats(std::vector<double>(e.begin() + part.first, e.begin() + part.first + part.count));
+      };
+      part.trajectory = slice(r.trajectory_errors);
+      part.trajectory_dr = slice(r.dr_trajectory_errors);
+    }
+    parts.push_back(part);
+  }
+  for (const Constraint& c : r.constraints) {
+    if (from_navigation(c.type) || r.config.graph.same_survey(c.from, c.to)) continue;
+    for (SurveyPart& part : parts) {
+      const bool touches = (c.from >= part.first && c.from < part.first + part.count) ||
+                           (c.to >= part.first && c.to < part.first + part.count);
+      if (!touches) continue;
+      ++part.cross_registered;
+      part.cross_accepted += c.in_graph() ? 1 : 0;
+    }
+  }
+  return parts;
+}
+
+nlohmann::json surveys_json(const PipelineResult& r) {
+  nlohmann::json surveys = nlohmann::json::array();
+  for (const SurveyPart& part : survey_parts(r)) {
+    nlohmann::json j = {{"first_submap", part.first}, {"submaps", part.count},
+                        {"registrations_with_other_surveys", {{"accepted", part.cross_accepted}, {"tried", part.cross_registered}}}};
+    if (part.trajectory) {
+      j["trajectory_error_m"] = {{"optimized", stats_json(*part.trajectory)}, {"dead_reckoning", stats_json(*part.trajectory_dr)}};
+    }
+    surveys.push_back(j);
+  }
+  return surveys;
+}
+
 nlohmann::json report_json(const PipelineResult& r) {
   const ReportSummary s = report_summary(r);
   nlohmann::json histogram = {{"bin_width_m", s.histogram.bin_width},
@@ -281,6 +335,7 @@ nlohmann::json report_json(const PipelineResult& r) {
                      {"batch_solves", r.batch_solves}, {"batch_solve_s", r.batch_solve_seconds}}},
           {"trajectory_error_m", trajectory},
           {"consistency_error_m", consistency},
+          {"surveys", surveys_json(r)},
           {"timings_s", timings}};
 }
 
@@ -306,6 +361,14 @@ std::string report_text(const PipelineResult& r) {
     summary += format("trajectory error   rmse %.2f m, mean %.2f m, std %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n"
                       "  aligned (2D)     rmse %.2f m, max %.2f m (dead reckoning: rmse %.2f m)\n",
                       t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse);
+  }
+  for (const SurveyPart& part : survey_parts(r)) {
+    summary += format("  survey at submap %d: %d submaps, %d/%d registrations with other surveys accepted", part.first,
+                      part.count, part.cross_accepted, part.cross_registered);
+    if (part.trajectory) {
+      summary += format(", trajectory rmse %.2f m (dead reckoning %.2f m)", part.trajectory->rmse, part.trajectory_dr->rmse);
+    }
+    summary += "\n";
   }
   if (const auto why = consistency_not_computed(r)) {
     summary += "consistency error  not computed: " + *why + "\n";

@@ -25,6 +25,7 @@ enum Stream : uint64_t {
   kDriftStream = 3,
   kAttitudeStream = 4,
   kCompassStepStream = 5,
+  kStartFixStream = 6,
 };
 
 }  // namespace bathyslam::sim

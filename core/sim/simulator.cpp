@@ -5,6 +5,9 @@
 #include <stdexcept>
 
 #include "core/sim/random.h"
+#include "core/sim/site.h"
+
+#include <Eigen/Geometry>
 #include "core/types/pose.h"
 
 namespace bathyslam::sim {
@@ -38,6 +41,7 @@ std::string survey_name(const SimulationConfig& config, double line_spacing_m) {
     std::snprintf(altitude, sizeof altitude, "-altitude%gm", *config.altitude_m);
     name += altitude;
   }
+  if (config.epoch > 0) name += "-epoch" + std::to_string(config.epoch);
   return name;
 }
 
@@ -161,11 +165,37 @@ double echo_limited_ping_rate_hz(double altitude_m, double swath_deg) {
   return 1500.0 / (2 * slant_range_m);
 }
 
-Simulation simulate(const SimulationConfig& config) {
+namespace {
+
+// A later epoch's own randomness (motion, sonar noise, drift) from the site's seed; the seabed
+// keeps the site's.
+uint64_t epoch_seed(const SimulationConfig& config) {
+  return config.epoch > 1 ? mix_seed(config.seed ^ (static_cast<uint64_t>(config.epoch) << 32)) : config.seed;
+}
+
+// Dead reckoning that began where the start fix put the vehicle: turned about its first sample
+// and moved by `error` (x, y in m; heading in rad, counter-clockwise).
+void start_from_fix(std::vector<NavSample>& nav, const Eigen::Vector3d& error) {
+  if (nav.empty() || error.isZero()) return;
+  const Eigen::Vector2d first(nav.front().easting, nav.front().northing);
+  const Eigen::Rotation2Dd turn(error.z());
+  for (NavSample& n : nav) {
+    const Eigen::Vector2d p = first + turn * (Eigen::Vector2d(n.easting, n.northing) - first) + error.head<2>();
+    n.easting = p.x();
+    n.northing = p.y();
+    n.heading_deg = std::fmod(n.heading_deg - error.z() * 180.0 / M_PI + 360.0, 360.0);
+  }
+}
+
+}  // namespace
+
+Simulation simulate(const SimulationConfig& given) {
+  SimulationConfig config = given;
+  config.seed = epoch_seed(given);
   MotionConfig motion = config.motion;
   motion.seed = config.seed;
   TerrainConfig terrain_config = config.terrain;
-  terrain_config.seed = config.seed;
+  terrain_config.seed = given.seed;
   const double k = world_scale(config);
   const SonarConfig sonar = sonar_of(config);
   motion.vehicle_depth_m *= k;
@@ -176,14 +206,23 @@ Simulation simulate(const SimulationConfig& config) {
   motion.turn_radius_m = k * lawnmower_turn_radius_m(line_spacing_m);
   std::vector<LineSpec> lines = survey_pattern(config.scenario, line_spacing_m);
   for (LineSpec& line : lines) line = {k * line.start, k * line.end};
-  const std::vector<VehicleState> states = drive(lines, motion);
   // Half a swath either side of the lines, plus room for turns.
   const double margin = k * (40.0 + 2.0 * terrain_config.mean_depth_m);
+  const Area seabed_area = config.epoch > 0 ? site_area(lines, k * line_spacing_m, margin) : pattern_area(lines, margin);
+  const std::vector<SeabedChange> changes = config.epoch > 1 ? seabed_changes(pattern_area(lines, 0), k) : std::vector<SeabedChange>{};
+  if (config.epoch > 1) {
+    lines = epoch_lines(lines, config.epoch, k * line_spacing_m);
+    motion.start_time += (config.epoch - 1) * 30 * 86400.0;  // a month apart
+  }
+  const std::vector<VehicleState> states = drive(lines, motion);
   Simulation sim;
-  sim.terrain = Terrain::generate(terrain_config, pattern_area(lines, margin), k);
+  sim.terrain = Terrain::generate(terrain_config, seabed_area, k);
+  for (const SeabedChange& change : changes) {
+    sim.terrain.change([&](double x, double y) { return elevation_change(change, x, y); });
+  }
 
   Survey& survey = sim.survey;
-  survey.metadata.name = survey_name(config, line_spacing_m);
+  survey.metadata.name = survey_name(given, line_spacing_m);
   survey.metadata.crs = config.crs;
 
   // Navigation at its rate from the first step; pings at theirs, offset by one step so ping
@@ -217,6 +256,7 @@ Simulation simulate(const SimulationConfig& config) {
   }
 
   survey.nav = dead_reckoning(config, sonar, truth, survey.pings.front().time, sim);
+  start_from_fix(survey.nav, start_fix_error(given.seed, config.epoch));
   sim.drift = drift_stats(survey.nav, truth);
   survey.reference_nav = std::move(truth);
 
@@ -242,6 +282,14 @@ Simulation simulate(const SimulationConfig& config) {
     simulation["turn_radius_m"] = motion.turn_radius_m;
   }
   if (config.altitude_m) simulation["altitude_m"] = *config.altitude_m;
+  if (config.epoch > 0) {
+    const Eigen::Vector3d fix = start_fix_error(given.seed, config.epoch);
+    simulation["site"] = {{"seed", given.seed}, {"epoch", config.epoch},
+                          {"start_fix_error", {{"x_m", fix.x()}, {"y_m", fix.y()}, {"heading_rad", fix.z()}}},
+                          {"changes_since_epoch_1", nlohmann::json::array()},
+                          {"local_origin", {{"easting", config.origin_easting}, {"northing", config.origin_northing}}}};
+    for (const SeabedChange& change : changes) simulation["site"]["changes_since_epoch_1"].push_back(to_json(change));
+  }
   return sim;
 }
 

@@ -32,6 +32,9 @@ struct SimulationConfig {
   // the vehicle keeps its speed and the sonar its fan, pinging as fast as the outer beams' echoes
   // come back (at most its ping rate).
   std::optional<double> altitude_m;
+  // 0: a survey alone. k >= 1: the k-th survey of a site (site.h): the seabed of `seed` over the
+  // site's area, changed after epoch 1; the pattern, drift, sonar noise and start fix of epoch k.
+  int epoch = 0;
   MotionConfig motion;    // its seed is replaced by `seed`
   SonarConfig sonar;
   double nav_rate_hz = 20.0;

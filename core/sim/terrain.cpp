@@ -176,6 +176,16 @@ void Terrain::sample_seabed(const TerrainConfig& config, const Area& area) {
 }
 
 // Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
+void Terrain::change(const std::function<double(double x, double y)>& delta_m) {
+  for (int j = 0; j < rows_; ++j) {
+    for (int i = 0; i < cols_; ++i) {
+      const double x = scale_ * (area_.min.x() + i * cell_m_), y = scale_ * (area_.min.y() + j * cell_m_);
+      elevation_[static_cast<std::size_t>(j) * cols_ + i] += static_cast<float>(delta_m(x, y) / scale_);
+    }
+  }
+  max_slope_ = steepest_slope();
+}
+
 double Terrain::steepest_slope() const {
   float steepest = 0;
   for (int j = 0; j + 1 < rows_; ++j) {

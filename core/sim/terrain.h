@@ -3,6 +3,7 @@
 // undulating regions (mounds, ridges, channels, fine roughness) alternating across the survey
 // area. The other kinds each stress one weakness of registration (see TerrainKind).
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -103,6 +104,9 @@ class Terrain {
   // How rough the terrain is at (x, y): 0 on flat ground, 1 in undulating regions (lake),
   // on sand waves, boulders and channel floors.
   double roughness_weight(double x, double y) const;
+  // The seabed changed by `delta_m(x, y)` metres of elevation (map frame) at every sample: a
+  // repeat survey's site after scour, dredging or a dropped object (site.h).
+  void change(const std::function<double(double x, double y)>& delta_m);
   // Largest surface slope (rise over run) anywhere; ray marching uses it as a safe step bound.
   double max_slope() const { return max_slope_; }
   Area area() const { return {scale_ * area_.min, scale_ * area_.max}; }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/io/bundle.h"
+#include "core/sim/site.h"
 
 namespace bathyslam::sim {
 namespace {
@@ -165,6 +166,61 @@ TEST(Simulator, AHigherSurveySeesTheSameSeabedScaledWithIt) {
   std::nth_element(down.begin(), down.begin() + down.size() / 2, down.end());
   EXPECT_NEAR(down[down.size() / 2], 36, 1) << "the seabed 36 m below the sonar";
   EXPECT_GT(high.drift.mean_m, 2 * low.drift.mean_m);
+}
+
+// Two epochs of one site: the same seabed but where it changed, flown on other lines (other
+// headings, another start) with another drift, the second's dead reckoning starting from its start
+// fix's error, the first's from the truth (the datum).
+TEST(Site, ALaterEpochFliesOtherLinesOverTheSameSeabedChangedWhereItSays) {
+  SimulationConfig config;
+  config.seed = 4;
+  config.epoch = 1;
+  const Simulation first = simulate(config);
+  config.epoch = 2;
+  const Simulation second = simulate(config);
+  const auto& site = second.survey.metadata.vehicle["simulation"]["site"];
+  ASSERT_EQ(site["changes_since_epoch_1"].size(), 3u);
+  std::vector<SeabedChange> changes;
+  for (const auto& c : site["changes_since_epoch_1"]) {
+    SeabedChange recorded;
+    recorded.kind = c["kind"].get<std::string>();
+    recorded.centre = {c["centre_m"][0].get<double>(), c["centre_m"][1].get<double>()};
+    recorded.size_m = {c["size_m"][0].get<double>(), c["size_m"][1].get<double>()};
+    recorded.height_m = c["height_m"].get<double>();
+    changes.push_back(recorded);
+  }
+  const auto change_at = [&](double x, double y) {
+    double sum = 0;
+    for (const SeabedChange& c : changes) sum += elevation_change(c, x, y);
+    return sum;
+  };
+  int unchanged = 0, changed = 0;
+  for (double x = -20; x < 220; x += 0.9) {
+    for (double y = -30; y < 80; y += 0.7) {
+      // The terrain is a 0.2 m grid, bilinear between samples: compared where the change is even.
+      const double change = change_at(x, y);
+      if (std::abs(change_at(x + 0.2, y + 0.2) - change) > 2e-3 || std::abs(change_at(x - 0.2, y - 0.2) - change) > 2e-3) continue;
+      EXPECT_NEAR(second.terrain.elevation(x, y) - first.terrain.elevation(x, y), change, 2e-3) << x << ", " << y;
+      (change == 0 ? unchanged : changed) += 1;
+    }
+  }
+  EXPECT_GT(changed, 300);
+  EXPECT_GT(unchanged, 10000);
+  for (const SeabedChange& c : changes) {
+    EXPECT_NEAR(second.terrain.elevation(c.centre.x(), c.centre.y()) - first.terrain.elevation(c.centre.x(), c.centre.y()),
+                c.height_m, 2e-3) << c.kind;
+  }
+  // Epoch 1 starts on the truth; epoch 2 as far off as its start fix says, and on another line.
+  const NavSample& dr1 = first.survey.nav.front();
+  const NavSample& truth1 = first.survey.reference_nav->front();
+  EXPECT_NEAR(std::hypot(dr1.easting - truth1.easting, dr1.northing - truth1.northing), 0, 1e-6);
+  const NavSample& dr2 = second.survey.nav.front();
+  const NavSample& truth2 = second.survey.reference_nav->front();
+  EXPECT_NEAR(std::hypot(dr2.easting - truth2.easting, dr2.northing - truth2.northing),
+              std::hypot(site["start_fix_error"]["x_m"].get<double>(), site["start_fix_error"]["y_m"].get<double>()), 1e-6);
+  EXPECT_GT(std::hypot(truth2.easting - truth1.easting, truth2.northing - truth1.northing), 50);
+  EXPECT_GT(std::abs(std::remainder(truth2.heading_deg - truth1.heading_deg, 360.0)), 90);
+  EXPECT_NE(second.survey.metadata.name, first.survey.metadata.name);
 }
 
 }  // namespace
