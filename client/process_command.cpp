@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -7,6 +8,7 @@
 
 #include "client/commands.h"
 #include "client/survey_options.h"
+#include "core/fuse/difference.h"
 #include "core/fuse/fuse.h"
 #include "core/fuse/soundings_csv.h"
 #include "core/io/bundle.h"
@@ -19,6 +21,7 @@
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/report.h"
 #include "core/products/corrected_gsf.h"
+#include "core/products/difference_products.h"
 #include "core/products/map_products.h"
 #include "core/submaps/joined_surveys.h"
 
@@ -33,6 +36,7 @@ struct ProcessOptions {
   FuseConfig fuse;
   bool export_gsf = false;
   bool export_soundings = false;
+  DifferenceConfig difference;
   std::string out;
 };
 
@@ -84,6 +88,24 @@ JobInput read_site(const ProcessOptions& o, const PipelineConfig& config, std::v
   joined.submaps = join_surveys(std::move(parts));
   joined.survey = surveys.front();
   return joined;
+}
+
+// The change from each later survey of the site from the first: difference_1_<k>.{tif,json}.
+void print_difference(const DifferenceProducts& d, double k_sigma) {
+  if (d.map.cells_compared == 0) {
+    std::printf("%s: the surveys share no cell of the map\n", d.stem.c_str());
+    return;
+  }
+  std::printf("%s.tif, .json: %zu of %zu cells changed beyond %g sigma (registration: %.3f m vertical, %.3f m horizontal), "
+              "%zu areas\n",
+              d.stem.c_str(), d.map.cells_significant, d.map.cells_compared, k_sigma, d.map.sigma_vertical_m,
+              d.map.sigma_horizontal_m, d.map.areas.size());
+  for (std::size_t i = 0; i < std::min<std::size_t>(d.map.areas.size(), 5); ++i) {
+    const ChangedArea& area = d.map.areas[i];
+    std::printf("  %8.0f m2 at (%.1f, %.1f): +%.1f m3, -%.1f m3, largest %+.2f m\n", area.area_m2,
+                area.easting, area.northing, area.gained_m3, area.lost_m3,
+                area.largest_change_m);
+  }
 }
 
 bool is_site(const ProcessOptions& o) {
@@ -140,6 +162,10 @@ void run_process(const ProcessOptions& o) {
     std::printf("soundings.csv: %llu corrected soundings\n", static_cast<unsigned long long>(n));
   }
   std::printf("map %.2f m cells: %s (%.1f s)\n", fuse.resolution_m, map_files.c_str(), fuse_seconds);
+  for (std::size_t k = 1; k < site.size(); ++k) {
+    print_difference(write_difference_products(result, survey.metadata, fuse, 0, static_cast<int>(k), o.difference, o.out),
+                     o.difference.k_sigma);
+  }
   std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
               o.out.c_str());
 }
@@ -168,6 +194,10 @@ void add_process_command(CLI::App& app) {
                 "(NAME.corrected.gsf, every record kept), a bundle as corrected.gsf");
   cmd->add_flag("--export-soundings", options->export_soundings,
                 "also write soundings.csv: every corrected sounding (easting,northing,elevation,line,submap)");
+  cmd->add_option("--change-sigmas", options->difference.k_sigma,
+                  "several surveys: a cell changed between two of them beyond this many standard deviations is significant")
+      ->check(CLI::Range(0.1, 100.0))
+      ->capture_default_str();
   cmd->add_option("--out", options->out, "output folder")->required();
   cmd->callback([options] { run_process(*options); });
 }

@@ -40,16 +40,20 @@ double quantile_upper_bound(const std::vector<double>& sorted, double p, double 
   return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(std::floor(rank)))];
 }
 
-ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                    const ConsistencyConfig& config) {
+namespace {
+
+// Key: cell (20 bits each way, 1 m cells reach ±500 km) and line (up to 2^20 lines).
+uint64_t cell_line_key(int64_t ix, int64_t iy, int line) {
+  return (static_cast<uint64_t>(ix & 0xFFFFF) << 40) | (static_cast<uint64_t>(iy & 0xFFFFF) << 20) |
+         static_cast<uint64_t>(line);
+}
+
+// Each line's mean elevation in each cell it has at least min_soundings in.
+std::unordered_map<uint64_t, double> line_means(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                                const ConsistencyConfig& config) {
   struct Sum {
     double z = 0;
     int n = 0;
-  };
-  // Key: cell (20 bits each way, 1 m cells reach ±500 km) and line (up to 2^20 lines).
-  auto key = [](int64_t ix, int64_t iy, int line) {
-    return (static_cast<uint64_t>(ix & 0xFFFFF) << 40) | (static_cast<uint64_t>(iy & 0xFFFFF) << 20) |
-           static_cast<uint64_t>(line);
   };
   std::unordered_map<uint64_t, Sum> per_line_cell;
   for (const Submap& s : set.submaps) {
@@ -57,29 +61,30 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
     const Eigen::Isometry3f pose = poses[s.index].cast<float>();
     for (const Eigen::Vector3f& p : s.points) {
       const Eigen::Vector3f m = pose * p;
-      Sum& sum = per_line_cell[key(static_cast<int64_t>(std::floor(m.x() / config.cell_m)),
-                                   static_cast<int64_t>(std::floor(m.y() / config.cell_m)), s.line)];
+      Sum& sum = per_line_cell[cell_line_key(static_cast<int64_t>(std::floor(m.x() / config.cell_m)),
+                                             static_cast<int64_t>(std::floor(m.y() / config.cell_m)), s.line)];
       sum.z += m.z();
       ++sum.n;
     }
   }
-  struct Spread {
-    double lo = INFINITY, hi = -INFINITY;
-    int lines = 0;
-  };
-  std::unordered_map<uint64_t, Spread> per_cell;
+  std::unordered_map<uint64_t, double> means;
   for (const auto& [k, sum] : per_line_cell) {
-    if (sum.n < config.min_soundings) continue;
-    Spread& spread = per_cell[k >> 20];
-    const double mean = sum.z / sum.n;
-    spread.lo = std::min(spread.lo, mean);
-    spread.hi = std::max(spread.hi, mean);
-    ++spread.lines;
+    if (sum.n >= config.min_soundings) means[k] = sum.z / sum.n;
   }
-  std::vector<double> errors;
-  for (const auto& [cell, spread] : per_cell) {
-    if (spread.lines >= 2) errors.push_back(spread.hi - spread.lo);
+  return means;
+}
+
+struct Spread {
+  double lo = INFINITY, hi = -INFINITY;
+  int lines = 0;
+  void add(double z) {
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+    ++lines;
   }
+};
+
+ConsistencyReport report_of(std::vector<double> errors, const ConsistencyConfig& config) {
   ConsistencyReport report;
   report.histogram.bin_width = config.histogram_bin_m;
   report.histogram.counts.assign(config.histogram_bins, 0);
@@ -92,6 +97,48 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
   report.p99_upper = quantile_upper_bound(errors, 0.99, 2.33);
   report.stats = error_stats(std::move(errors));
   return report;
+}
+
+}  // namespace
+
+ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                    const ConsistencyConfig& config) {
+  std::unordered_map<uint64_t, Spread> per_cell;
+  for (const auto& [k, mean] : line_means(set, poses, config)) per_cell[k >> 20].add(mean);
+  std::vector<double> errors;
+  for (const auto& [cell, spread] : per_cell) {
+    if (spread.lines >= 2) errors.push_back(spread.hi - spread.lo);
+  }
+  return report_of(std::move(errors), config);
+}
+
+SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                 const ConsistencyConfig& config) {
+  std::vector<int> survey_of_line(set.lines.size(), 0);
+  for (const Submap& s : set.submaps) {
+    if (s.line >= 0) {
+      survey_of_line.at(s.line) = static_cast<int>(std::upper_bound(set.survey_starts.begin(), set.survey_starts.end(), s.index) -
+                                                   set.survey_starts.begin());
+    }
+  }
+  const std::size_t surveys = set.survey_starts.size() + 1;
+  std::unordered_map<uint64_t, std::vector<Spread>> per_cell;  // a spread per survey
+  for (const auto& [k, mean] : line_means(set, poses, config)) {
+    std::vector<Spread>& spreads = per_cell[k >> 20];
+    spreads.resize(surveys);
+    spreads[survey_of_line.at(k & 0xFFFFF)].add(mean);
+  }
+  std::vector<double> within, across;
+  for (const auto& [cell, spreads] : per_cell) {
+    for (std::size_t a = 0; a < surveys; ++a) {
+      if (spreads[a].lines >= 2) within.push_back(spreads[a].hi - spreads[a].lo);
+      for (std::size_t b = a + 1; b < surveys; ++b) {
+        if (spreads[a].lines == 0 || spreads[b].lines == 0) continue;
+        across.push_back(std::max(spreads[a].hi - spreads[b].lo, spreads[b].hi - spreads[a].lo));
+      }
+    }
+  }
+  return {report_of(std::move(within), config), report_of(std::move(across), config)};
 }
 
 std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses) {

@@ -53,6 +53,16 @@ double quantile_upper_bound(const std::vector<double>& sorted, double p, double 
 ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                     const ConsistencyConfig& config = {});
 
+// Several surveys of one site (SubmapSet::survey_starts): the same within each survey's lines,
+// and across surveys, per cell seen by two of them, the largest difference between a line of one
+// and a line of the other (every pair of surveys counted apart). A seabed that changed between the
+// surveys shows in `across` too.
+struct SiteConsistency {
+  ConsistencyReport within, across;
+};
+SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                 const ConsistencyConfig& config = {});
+
 // Horizontal distance of each submap pose from its reference pose (the first pose is shared).
 std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);
 

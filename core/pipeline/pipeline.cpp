@@ -202,6 +202,10 @@ void evaluate(PipelineResult& r, const Plan& plan) {
   r.dr_consistency = consistency_error(r.submaps, r.dr_poses, r.config.consistency);
   r.consistency = consistency_error(r.submaps, r.optimized_poses, r.config.consistency);
   if (plan.safety_net && !r.safety_net.fell_back) fall_back_unless_more_consistent(r);
+  if (!r.submaps.survey_starts.empty()) {
+    r.dr_site_consistency = site_consistency(r.submaps, r.dr_poses, r.config.consistency);
+    r.site_consistency = site_consistency(r.submaps, r.optimized_poses, r.config.consistency);
+  }
   r.dr_trajectory_errors = trajectory_errors(r.submaps, r.dr_poses);
   r.trajectory_errors = trajectory_errors(r.submaps, r.optimized_poses);
   r.dr_aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.dr_poses);

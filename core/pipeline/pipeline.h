@@ -3,6 +3,7 @@
 // reported through a callback and cancellation checked between units of work.
 #include <atomic>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -51,6 +52,8 @@ struct PipelineResult {
   // The same after the best rigid 2D alignment onto the reference (eval/metrics.h).
   std::vector<double> dr_aligned_trajectory_errors, aligned_trajectory_errors;
   ConsistencyReport dr_consistency, consistency;
+  // Several surveys of one site: consistency within the surveys and across them.
+  std::optional<SiteConsistency> dr_site_consistency, site_consistency;
   std::vector<StageTiming> timings;
   // Within the register stage: the graph solves between its batches (how a growing survey's
   // graph costs, in the report's "graph" section).

@@ -287,7 +287,8 @@ std::vector<SurveyPart> survey_parts(const PipelineResult& r) {
   return parts;
 }
 
-nlohmann::json surveys_json(const PipelineResult& r) {
+nlohmann::json site_json(const PipelineResult& r) {
+  if (!r.site_consistency) return nullptr;
   nlohmann::json surveys = nlohmann::json::array();
   for (const SurveyPart& part : survey_parts(r)) {
     nlohmann::json j = {{"first_submap", part.first}, {"submaps", part.count},
@@ -297,7 +298,11 @@ nlohmann::json surveys_json(const PipelineResult& r) {
     }
     surveys.push_back(j);
   }
-  return surveys;
+  const SiteConsistency &c = *r.site_consistency, &c0 = *r.dr_site_consistency;
+  return {{"surveys", surveys},
+          {"consistency_error_m",
+           {{"within_surveys", {{"optimized", stats_json(c.within.stats)}, {"dead_reckoning", stats_json(c0.within.stats)}}},
+            {"across_surveys", {{"optimized", stats_json(c.across.stats)}, {"dead_reckoning", stats_json(c0.across.stats)}}}}}};
 }
 
 nlohmann::json report_json(const PipelineResult& r) {
@@ -335,7 +340,7 @@ nlohmann::json report_json(const PipelineResult& r) {
                      {"batch_solves", r.batch_solves}, {"batch_solve_s", r.batch_solve_seconds}}},
           {"trajectory_error_m", trajectory},
           {"consistency_error_m", consistency},
-          {"surveys", surveys_json(r)},
+          {"site", site_json(r)},
           {"timings_s", timings}};
 }
 
@@ -375,6 +380,13 @@ std::string report_text(const PipelineResult& r) {
   } else {
     summary += format("consistency error  rmse %.3f m, p95 %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
                       c.rmse, c.p95, c.p99, c.count, c0.rmse);
+  }
+  if (r.site_consistency) {
+    const SiteConsistency &site = *r.site_consistency, &site0 = *r.dr_site_consistency;
+    summary += format("  within surveys   consistency rmse %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n"
+                      "  across surveys   consistency rmse %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
+                      site.within.stats.rmse, site.within.stats.p99, site.within.stats.count, site0.within.stats.rmse,
+                      site.across.stats.rmse, site.across.stats.p99, site.across.stats.count, site0.across.stats.rmse);
   }
   if (r.navigation_noise.estimated) {
     const NavigationNoiseEstimate& e = r.navigation_noise;

@@ -16,10 +16,15 @@ std::string what(const std::filesystem::path& path) { return path.string() + ": 
 }  // namespace
 
 void write_geotiff(const GridRaster& raster, std::string_view crs, const std::filesystem::path& path) {
-  // The COG driver only copies, so the bands are first assembled in memory.
   const std::array<NamedBand, 3> bands{
       {{"elevation", &raster.elevation}, {"uncertainty", &raster.uncertainty}, {"count", &raster.count}}};
-  GdalDatasetPtr mem = memory_raster(raster.geometry, crs, bands, std::nan(""), what(path));
+  write_geotiff(raster.geometry, bands, crs, path);
+}
+
+void write_geotiff(const GridGeometry& geometry, std::span<const NamedBand> bands, std::string_view crs,
+                   const std::filesystem::path& path) {
+  // The COG driver only copies, so the bands are first assembled in memory.
+  GdalDatasetPtr mem = memory_raster(geometry, crs, bands, std::nan(""), what(path));
   mem->SetMetadataItem("AREA_OR_POINT", "Area");
 
   CPLStringList options;

@@ -4,6 +4,7 @@
 // 512 × 512 tiles, ZSTD with the floating-point predictor, and averaged overviews when the raster
 // is larger than one tile.
 #include <filesystem>
+#include <span>
 #include <string_view>
 
 #include "core/fuse/grid.h"
@@ -13,5 +14,10 @@ namespace bathyslam {
 // Writes `raster` (cells in `crs`, an "EPSG:<code>") to `path`; throws std::runtime_error naming
 // the path when GDAL cannot.
 void write_geotiff(const GridRaster& raster, std::string_view crs, const std::filesystem::path& path);
+
+// The same for any Float32 bands of `geometry` (NamedBand, gdal_raster.h), NaN NoData.
+struct NamedBand;
+void write_geotiff(const GridGeometry& geometry, std::span<const NamedBand> bands, std::string_view crs,
+                   const std::filesystem::path& path);
 
 }  // namespace bathyslam

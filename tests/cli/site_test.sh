@@ -23,7 +23,7 @@ python3 - "$work" <<'PY'
 import json, sys
 work = sys.argv[1]
 joint = json.load(open(f"{work}/joint/report.json"))
-surveys = joint["surveys"]
+surveys = joint["site"]["surveys"]
 assert len(surveys) == 2, surveys
 for k, part in enumerate(surveys, start=1):
     alone = json.load(open(f"{work}/alone{k}/report.json"))["trajectory_error_m"]["optimized"]["rmse"]

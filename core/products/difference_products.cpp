@@ -1,0 +1,44 @@
+#include "core/products/difference_products.h"
+
+#include <array>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/io/file_bytes.h"
+#include "core/tiles/gdal_raster.h"
+#include "core/tiles/geotiff_writer.h"
+
+namespace bathyslam {
+
+DifferenceProducts write_difference_products(const PipelineResult& result, const SurveyMetadata& survey,
+                                             const FuseConfig& fuse, int before, int after,
+                                             const DifferenceConfig& config, const std::filesystem::path& dir) {
+  DifferenceProducts out;
+  out.stem = "difference_" + std::to_string(before + 1) + "_" + std::to_string(after + 1);
+  out.map = difference_map(fuse_survey(result.submaps, result.optimized_poses, before, fuse),
+                           fuse_survey(result.submaps, result.optimized_poses, after, fuse), config);
+  const DifferenceMap& d = out.map;
+  if (d.cells_compared == 0) return out;
+  const std::array<NamedBand, 3> bands{{{"change", &d.change}, {"sigma", &d.sigma}, {"significant", &d.significant}}};
+  write_geotiff(d.geometry, bands, survey.crs, dir / (out.stem + ".tif"));
+
+  nlohmann::json areas = nlohmann::json::array();
+  for (const ChangedArea& area : d.areas) {
+    areas.push_back({{"easting", area.easting}, {"northing", area.northing},
+                     {"area_m2", area.area_m2}, {"gained_m3", area.gained_m3}, {"lost_m3", area.lost_m3},
+                     {"largest_change_m", area.largest_change_m}});
+  }
+  const nlohmann::json json = {{"before", before + 1}, {"after", after + 1}, {"crs", survey.crs},
+                               {"k_sigma", config.k_sigma}, {"cell_m", d.geometry.resolution_m},
+                               {"cells_compared", d.cells_compared}, {"cells_significant", d.cells_significant},
+                               {"registration_sigma_m", {{"vertical", d.sigma_vertical_m}, {"horizontal", d.sigma_horizontal_m}}},
+                               {"changed_areas", areas}};
+  const std::filesystem::path path = dir / (out.stem + ".json");
+  std::ofstream file(path);
+  file << json.dump(2) << '\n';
+  close_checked(file, path);
+  return out;
+}
+
+}  // namespace bathyslam
