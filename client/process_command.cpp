@@ -96,9 +96,9 @@ void print_difference(const DifferenceProducts& d, double k_sigma) {
     std::printf("%s: the surveys share no cell of the map\n", d.stem.c_str());
     return;
   }
-  std::printf("%s.tif, .json: %zu of %zu cells changed beyond %g sigma (registration: %.3f m vertical, %.3f m horizontal), "
-              "%zu areas\n",
-              d.stem.c_str(), d.map.cells_significant, d.map.cells_compared, k_sigma, d.map.sigma_vertical_m,
+  std::printf("%s.tif, .json: %zu of %zu cells changed beyond %g sigma (registration: local offsets rms %.3f m taken out, "
+              "sigma %.3f m vertical, %.3f m horizontal), %zu areas\n",
+              d.stem.c_str(), d.map.cells_significant, d.map.cells_compared, k_sigma, d.map.offset_rms_m, d.map.sigma_vertical_m,
               d.map.sigma_horizontal_m, d.map.areas.size());
   for (std::size_t i = 0; i < std::min<std::size_t>(d.map.areas.size(), 5); ++i) {
     const ChangedArea& area = d.map.areas[i];

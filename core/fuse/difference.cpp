@@ -14,13 +14,14 @@ double median(std::vector<double> v) {
   return *mid;
 }
 
-// 1.4826 · median |x − median|: the standard deviation of the bulk, whatever the few outliers.
+// 1.4826 · median |x|: the spread of the bulk about zero, whatever the few outliers. About zero,
+// not about the median: a registration's vertical offset and, on a slope, its horizontal one move
+// the bulk, and they are the registration's error as much as its scatter is.
 double robust_sigma(const std::vector<double>& v) {
-  const double m = median(v);
-  std::vector<double> deviations;
-  deviations.reserve(v.size());
-  for (double x : v) deviations.push_back(std::abs(x - m));
-  return 1.4826 * median(std::move(deviations));
+  std::vector<double> magnitudes;
+  magnitudes.reserve(v.size());
+  for (double x : v) magnitudes.push_back(std::abs(x));
+  return 1.4826 * median(std::move(magnitudes));
 }
 
 // The slope (rise over run) of `z` at cell i by central differences where both neighbours have
@@ -123,13 +124,51 @@ std::vector<ChangedArea> changed_areas(const DifferenceMap& d, int min_cells) {
   return areas;
 }
 
+// The median of `change` in a window of `window` cells around each cell: medians over windows
+// centred on a lattice of half a window, bilinear between them (cells of a window with no change
+// do not count; a window with none takes no offset).
+std::vector<float> local_offsets(const std::vector<float>& change, const GridGeometry& g, int window) {
+  const int step = std::max(1, window / 2);
+  const int nx = g.width / step + 2, ny = g.height / step + 2;
+  std::vector<double> medians(static_cast<std::size_t>(nx) * ny, 0);
+  std::vector<double> values;
+  for (int by = 0; by < ny; ++by) {
+    for (int bx = 0; bx < nx; ++bx) {
+      values.clear();
+      const int cx = bx * step, cy = by * step;
+      for (int y = std::max(0, cy - window / 2); y < std::min(g.height, cy + window / 2); ++y) {
+        for (int x = std::max(0, cx - window / 2); x < std::min(g.width, cx + window / 2); ++x) {
+          const float c = change[static_cast<std::size_t>(y) * g.width + x];
+          if (!std::isnan(c)) values.push_back(c);
+        }
+      }
+      medians[static_cast<std::size_t>(by) * nx + bx] = median(values);
+    }
+  }
+  std::vector<float> offset(change.size(), NAN);
+  for (int y = 0; y < g.height; ++y) {
+    for (int x = 0; x < g.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * g.width + x;
+      if (std::isnan(change[i])) continue;
+      const int bx = x / step, by = y / step;
+      const double fx = double(x - bx * step) / step, fy = double(y - by * step) / step;
+      const auto m = [&](int xx, int yy) { return medians[static_cast<std::size_t>(yy) * nx + xx]; };
+      offset[i] = static_cast<float>((1 - fy) * ((1 - fx) * m(bx, by) + fx * m(bx + 1, by)) +
+                                     fy * ((1 - fx) * m(bx, by + 1) + fx * m(bx + 1, by + 1)));
+    }
+  }
+  return offset;
+}
+
 }  // namespace
 
 GridRaster fuse_survey(const SubmapSet& set, std::span<const Eigen::Isometry3d> poses, int survey, const FuseConfig& config) {
   const std::size_t first = survey > 0 ? set.survey_starts.at(survey - 1) : 0;
   const std::size_t end = survey < static_cast<int>(set.survey_starts.size()) ? set.survey_starts[survey] : set.submaps.size();
   GridFuser fuser(set.origin, config);
-  for (std::size_t i = first; i < end; ++i) fuser.add(set.submaps[i].points, poses[i]);
+  for (std::size_t i = first; i < end; ++i) {
+    if (set.submaps[i].line >= 0) fuser.add(set.submaps[i].points, poses[i]);
+  }
   return fuser.raster();
 }
 
@@ -156,6 +195,14 @@ DifferenceMap difference_map(const GridRaster& before, const GridRaster& after, 
       noise[i] = standard_error2(before.uncertainty[a], before.count[a]) + standard_error2(after.uncertainty[b], after.count[b]);
     }
   }
+  const int window = static_cast<int>(std::lround(config.offset_window_m / g.resolution_m));
+  d.offset = window > 0 ? local_offsets(d.change, g, window) : std::vector<float>(g.cells(), 0.0f);
+  double offset2 = 0;
+  for (std::size_t i = 0; i < g.cells(); ++i) {
+    if (std::isnan(d.change[i])) continue;
+    d.change[i] -= d.offset[i];
+    offset2 += double(d.offset[i]) * d.offset[i];
+  }
   std::vector<double> changes, slopes;
   std::vector<double> slope(g.cells(), 0);
   for (int y = 0; y < g.height; ++y) {
@@ -168,6 +215,7 @@ DifferenceMap difference_map(const GridRaster& before, const GridRaster& after, 
     }
   }
   d.cells_compared = changes.size();
+  d.offset_rms_m = d.cells_compared ? std::sqrt(offset2 / d.cells_compared) : 0;
   fit_registration_sigma(changes, slopes, d);
   for (std::size_t i = 0; i < g.cells(); ++i) {
     if (std::isnan(d.change[i])) continue;

@@ -14,12 +14,19 @@
 
 namespace bathyslam {
 
-// The map of one survey of a joined set (0-based, join order) at `poses`.
+// The map of one survey of a joined set (0-based, join order) at `poses`, from its submaps on
+// survey lines: a turn's submaps are held by few registrations and swing the swath, and on `lake`
+// they made most of the false changes (docs/sites.md).
 GridRaster fuse_survey(const SubmapSet& set, std::span<const Eigen::Isometry3d> poses, int survey, const FuseConfig& config);
 
 struct DifferenceConfig {
   double k_sigma = 3;  // a change is significant beyond k standard deviations
   int min_cells = 4;   // a changed area has at least this many significant cells (4-connected)
+  // The registration leaves local offsets between the surveys (where one of them is held by few
+  // registrations: line ends, turns): the median change in a window this wide around each cell is
+  // taken for the registration's and removed. A change must cover less than half of it to stay.
+  // 0: none removed.
+  double offset_window_m = 100;
 };
 
 struct ChangedArea {
@@ -32,14 +39,16 @@ struct ChangedArea {
 struct DifferenceMap {
   GridGeometry geometry;                     // the cells both surfaces have
   std::vector<float> change, sigma, significant;  // after − before (m, up); its sigma; 1 or 0; NaN without both
+  std::vector<float> offset;  // the local offset removed from `change` (offset_window_m)
   // The registration's part of the sigma, estimated from the cells themselves: a vertical offset
   // and a horizontal one, which moves a sloping cell by its slope times it.
   double sigma_vertical_m = 0, sigma_horizontal_m = 0;
+  double offset_rms_m = 0;  // of the local offsets removed
   std::size_t cells_compared = 0, cells_significant = 0;
   std::vector<ChangedArea> areas;  // largest first
 };
 
-// after − before per cell. Each cell's sigma: both surfaces' standard error of their mean (the
+// after − before per cell, less the local offset around it. Each cell's sigma: both surfaces' standard error of their mean (the
 // cells' spread over √count), and the registration's, sigma_vertical² + (slope · sigma_horizontal)²,
 // fitted to the robust spread of the changes in bins of slope (most of a site does not change, so
 // the spread of its differences is the registration's and the surfaces' noise).

@@ -20,7 +20,8 @@ DifferenceProducts write_difference_products(const PipelineResult& result, const
                            fuse_survey(result.submaps, result.optimized_poses, after, fuse), config);
   const DifferenceMap& d = out.map;
   if (d.cells_compared == 0) return out;
-  const std::array<NamedBand, 3> bands{{{"change", &d.change}, {"sigma", &d.sigma}, {"significant", &d.significant}}};
+  const std::array<NamedBand, 4> bands{
+      {{"change", &d.change}, {"sigma", &d.sigma}, {"significant", &d.significant}, {"local_offset", &d.offset}}};
   write_geotiff(d.geometry, bands, survey.crs, dir / (out.stem + ".tif"));
 
   nlohmann::json areas = nlohmann::json::array();
@@ -33,6 +34,7 @@ DifferenceProducts write_difference_products(const PipelineResult& result, const
                                {"k_sigma", config.k_sigma}, {"cell_m", d.geometry.resolution_m},
                                {"cells_compared", d.cells_compared}, {"cells_significant", d.cells_significant},
                                {"registration_sigma_m", {{"vertical", d.sigma_vertical_m}, {"horizontal", d.sigma_horizontal_m}}},
+                               {"offset_window_m", config.offset_window_m}, {"local_offset_rms_m", d.offset_rms_m},
                                {"changed_areas", areas}};
   const std::filesystem::path path = dir / (out.stem + ".json");
   std::ofstream file(path);

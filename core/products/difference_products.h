@@ -1,6 +1,6 @@
 #pragma once
 // The difference of two surveys of a site as files: difference_<a>_<b>.tif (Float32 bands change,
-// sigma and significant, NaN where either survey has no data) and difference_<a>_<b>.json (the
+// sigma, significant and the local offset taken out, NaN where either survey has no data) and difference_<a>_<b>.json (the
 // registration's sigmas, the counts and the changed areas in the CRS), numbered from 1 in the
 // order the surveys were joined.
 #include <filesystem>

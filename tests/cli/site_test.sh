@@ -4,7 +4,8 @@
 # `process A B` joins them in one graph. Each survey's trajectory must come out better than
 # processed alone, registrations across the surveys must be accepted, the robustness checks must
 # hold (no accepted loop off by more than 2 m or 2 deg where it claims to know, no edge beyond
-# 6 sigma), and surveys in two CRSs are refused naming the file.
+# 6 sigma), the difference map must find the dredged area, and surveys in two CRSs are refused
+# naming the file.
 set -euo pipefail
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -31,6 +32,19 @@ for k, part in enumerate(surveys, start=1):
     print(f"survey {k}: trajectory rmse alone {alone:.2f} m, joint {together:.2f} m")
     assert together < alone, f"survey {k}: joint {together:.2f} m is not below alone {alone:.2f} m"
     assert part["registrations_with_other_surveys"]["accepted"] > 0, part
+
+# The difference map finds the area dredged between the epochs: its size, place and depth.
+site = json.load(open(f"{work}/e2/survey.json"))["vehicle"]["simulation"]["site"]
+dredged = next(c for c in site["changes_since_epoch_1"] if c["kind"] == "dredged area")
+east = site["local_origin"]["easting"] + dredged["centre_m"][0]
+north = site["local_origin"]["northing"] + dredged["centre_m"][1]
+difference = json.load(open(f"{work}/joint/difference_1_2.json"))
+largest = difference["changed_areas"][0]
+print(f"largest change: {largest['area_m2']:.0f} m2 at ({largest['easting']:.1f}, {largest['northing']:.1f}), "
+      f"lost {largest['lost_m3']:.1f} m3; dredged: {dredged['size_m'][0] * dredged['size_m'][1]:.0f} m2 at ({east:.1f}, {north:.1f})")
+assert abs(largest["easting"] - east) < 5 and abs(largest["northing"] - north) < 5, largest
+assert 0.8 * 1200 < largest["area_m2"] < 1.1 * 1200, largest
+assert abs(largest["largest_change_m"] - dredged["height_m"]) < 0.1, largest
 PY
 verdict=$(python3 "$rows" lake paper 1 "odometry=$work/joint-odometry/report.json" "mchs=$work/joint/report.json" |
           awk -F'|' '$5 ~ /mchs/ {gsub(/ /, "", $16); print $16}')
