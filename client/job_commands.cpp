@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,13 +32,16 @@ std::string state_name(v1::JobState state) {
 struct SubmitOptions {
   Remote remote;
   std::int64_t survey = 0;
+  std::vector<std::int64_t> surveys;  // --surveys: several of one site, the first the datum
   std::string config = "mchs";
   std::vector<std::string> sets;
 };
 
 void run_submit(const SubmitOptions& o) {
   v1::SubmitJobRequest request;
-  request.set_survey_id(o.survey);
+  if ((o.survey != 0) == !o.surveys.empty()) throw std::invalid_argument("submit: give one survey id, or --surveys A,B,...");
+  request.set_survey_id(o.survey != 0 ? o.survey : o.surveys.front());
+  for (std::size_t k = 1; k < o.surveys.size(); ++k) request.add_more_survey_ids(o.surveys[k]);
   request.set_configuration(o.config);
   // Parsed as `process` parses them; the server checks names and values (configuration_of).
   for (const auto& [name, value] : overrides_of(o.sets)) (*request.mutable_parameters())[name] = value;
@@ -163,7 +167,11 @@ void run_report(const JobOptions& o) {
 void add_job_commands(CLI::App& app) {
   auto submit = std::make_shared<SubmitOptions>();
   CLI::App* cmd = app.add_subcommand("submit", "Submit a SLAM job on an uploaded survey; prints the job id");
-  cmd->add_option("survey", submit->survey, "survey id (from upload)")->required();
+  cmd->add_option("survey", submit->survey, "survey id (from upload)");
+  cmd->add_option("--surveys", submit->surveys,
+                  "several surveys of one site in one graph, comma-separated; the first is held (the datum) and the "
+                  "report and difference maps compare the others with it")
+      ->delimiter(',');
   cmd->add_option("--config", submit->config, "odometry, gicp or mchs")->capture_default_str();
   cmd->add_option("--set", submit->sets, "override a parameter: key=value (repeatable)");
   add_remote_options(cmd, submit->remote);

@@ -20,7 +20,8 @@ struct MapOptions {
   std::int64_t job = 0;
   std::string out;
   std::string format = "geotiff";
-  std::string map_format = "cog";  // `map`: cog, bag or gsf
+  std::string map_format = "cog";  // `map`: cog, bag, gsf or difference
+  int epoch = 2;                    // `map --format difference`: the later survey
   std::vector<double> bbox;  // min easting, min northing, max easting, max northing
 };
 
@@ -107,7 +108,11 @@ void run_tiles(const MapOptions& o) {
 void run_map(const MapOptions& o) {
   v1::GetMapRequest request;
   request.set_job_id(o.job);
-  request.set_format(o.map_format == "bag" ? v1::BAG : o.map_format == "gsf" ? v1::GSF : v1::COG);
+  request.set_format(o.map_format == "bag"          ? v1::BAG
+                     : o.map_format == "gsf"        ? v1::GSF
+                     : o.map_format == "difference" ? v1::DIFFERENCE
+                                                    : v1::COG);
+  request.set_epoch(o.epoch);
   auto context = o.remote.context();
   auto reader = v1::MapService::NewStub(o.remote.channel())->GetMap(context.get(), request);
   const std::int64_t size = save(reader, "GetMap", o.out);
@@ -130,9 +135,12 @@ void add_map_commands(CLI::App& app) {
   cmd = app.add_subcommand("map", "Download a job's whole map as one Cloud Optimized GeoTIFF or BAG, or its corrected GSF");
   cmd->add_option("job", map->job, "job id")->required();
   cmd->add_option("--format", map->map_format,
-                  "cog (elevation, uncertainty, count), bag (elevation, uncertainty) or gsf (the survey's pings "
-                  "with the corrected navigation)")
-      ->check(CLI::IsMember({"cog", "bag", "gsf"}))
+                  "cog (elevation, uncertainty, count), bag (elevation, uncertainty), gsf (the survey's pings "
+                  "with the corrected navigation) or difference (a job of several surveys: the change from the first "
+                  "to --epoch)")
+      ->check(CLI::IsMember({"cog", "bag", "gsf", "difference"}))
+      ->capture_default_str();
+  cmd->add_option("--epoch", map->epoch, "--format difference: the later survey's place in the job (2 to N)")
       ->capture_default_str();
   cmd->add_option("--out", map->out, "output file (.tif, .bag or .gsf)")->required();
   add_remote_options(cmd, map->remote);

@@ -23,7 +23,6 @@
 #include "core/products/corrected_gsf.h"
 #include "core/products/difference_products.h"
 #include "core/products/map_products.h"
-#include "core/submaps/joined_surveys.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -65,29 +64,15 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
   }
 }
 
-// Several bundles: several surveys of one site, each read alone, joined into one graph
-// (join_surveys); the map's cells the finest any of them asks for. Every survey must share the
-// first one's CRS.
+// Several bundles: several surveys of one site, each read alone, joined in one graph.
 JobInput read_site(const ProcessOptions& o, const PipelineConfig& config, std::vector<Survey>& surveys) {
-  std::vector<SubmapSet> parts;
-  JobInput joined;
+  std::vector<SurveyReader> reads;
   for (const std::string& path : o.survey.inputs) {
     SurveyOptions one = o.survey;
     one.inputs = {path};
-    JobInput input = read_job_input([&](PingSink& sink) { return load_survey(one.input(), sink).survey; }, config, o.fuse);
-    if (!surveys.empty() && input.survey.metadata.crs != surveys.front().metadata.crs) {
-      throw std::runtime_error(path + ": survey.json: crs " + input.survey.metadata.crs + " is not the first survey's (" +
-                               surveys.front().metadata.crs + "): surveys of one site share a CRS");
-    }
-    joined.fuse = surveys.empty() || input.fuse.resolution_m < joined.fuse.resolution_m ? input.fuse : joined.fuse;
-    joined.pings += input.pings;
-    joined.read_seconds += input.read_seconds;
-    parts.push_back(std::move(input.submaps));
-    surveys.push_back(std::move(input.survey));
+    reads.push_back([one](PingSink& sink) { return load_survey(one.input(), sink).survey; });
   }
-  joined.submaps = join_surveys(std::move(parts));
-  joined.survey = surveys.front();
-  return joined;
+  return read_site_input(reads, o.survey.inputs, config, o.fuse, surveys);
 }
 
 // The change from each later survey of the site from the first: difference_1_<k>.{tif,json}.

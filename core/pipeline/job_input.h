@@ -6,6 +6,8 @@
 // destination (files, the database) is the caller's.
 #include <cstddef>
 #include <functional>
+#include <string>
+#include <vector>
 
 #include "core/fuse/fuse.h"
 #include "core/io/bundle.h"
@@ -30,5 +32,12 @@ using SurveyReader = std::function<Survey(PingSink&)>;
 // `fuse.max_cells` > 0, a map that would need more cells is refused here, naming nav.csv's
 // extent (std::runtime_error), before the pipeline spends anything on it.
 JobInput read_job_input(const SurveyReader& read, const PipelineConfig& config, FuseConfig fuse);
+
+// Several surveys of one site: each read as read_job_input reads one, their submaps joined in
+// the order given (join_surveys), the map's cell the finest any of them asks for; `surveys`
+// receives each survey without its soundings, and the input's `survey` is the first's. Throws
+// std::runtime_error naming `names[k]` when survey k's CRS is not the first's.
+JobInput read_site_input(const std::vector<SurveyReader>& reads, const std::vector<std::string>& names,
+                         const PipelineConfig& config, const FuseConfig& fuse, std::vector<Survey>& surveys);
 
 }  // namespace bathyslam

@@ -19,26 +19,26 @@ DifferenceProducts write_difference_products(const PipelineResult& result, const
   out.map = difference_map(fuse_survey(result.submaps, result.optimized_poses, before, fuse),
                            fuse_survey(result.submaps, result.optimized_poses, after, fuse), config);
   const DifferenceMap& d = out.map;
-  if (d.cells_compared == 0) return out;
-  const std::array<NamedBand, 4> bands{
-      {{"change", &d.change}, {"sigma", &d.sigma}, {"significant", &d.significant}, {"local_offset", &d.offset}}};
-  write_geotiff(d.geometry, bands, survey.crs, dir / (out.stem + ".tif"));
-
   nlohmann::json areas = nlohmann::json::array();
   for (const ChangedArea& area : d.areas) {
     areas.push_back({{"easting", area.easting}, {"northing", area.northing},
                      {"area_m2", area.area_m2}, {"gained_m3", area.gained_m3}, {"lost_m3", area.lost_m3},
                      {"largest_change_m", area.largest_change_m}});
   }
-  const nlohmann::json json = {{"before", before + 1}, {"after", after + 1}, {"crs", survey.crs},
-                               {"k_sigma", config.k_sigma}, {"cell_m", d.geometry.resolution_m},
-                               {"cells_compared", d.cells_compared}, {"cells_significant", d.cells_significant},
-                               {"registration_sigma_m", {{"vertical", d.sigma_vertical_m}, {"horizontal", d.sigma_horizontal_m}}},
-                               {"offset_window_m", config.offset_window_m}, {"local_offset_rms_m", d.offset_rms_m},
-                               {"changed_areas", areas}};
+  out.summary = {{"before", before + 1}, {"after", after + 1}, {"crs", survey.crs},
+                 {"file", d.cells_compared > 0 ? nlohmann::json(out.stem + ".tif") : nlohmann::json(nullptr)},
+                 {"k_sigma", config.k_sigma}, {"cell_m", d.geometry.resolution_m},
+                 {"cells_compared", d.cells_compared}, {"cells_significant", d.cells_significant},
+                 {"registration_sigma_m", {{"vertical", d.sigma_vertical_m}, {"horizontal", d.sigma_horizontal_m}}},
+                 {"offset_window_m", config.offset_window_m}, {"local_offset_rms_m", d.offset_rms_m},
+                 {"changed_areas", areas}};
+  if (d.cells_compared == 0) return out;
+  const std::array<NamedBand, 4> bands{
+      {{"change", &d.change}, {"sigma", &d.sigma}, {"significant", &d.significant}, {"local_offset", &d.offset}}};
+  write_geotiff(d.geometry, bands, survey.crs, dir / (out.stem + ".tif"));
   const std::filesystem::path path = dir / (out.stem + ".json");
   std::ofstream file(path);
-  file << json.dump(2) << '\n';
+  file << out.summary.dump(2) << '\n';
   close_checked(file, path);
   return out;
 }

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "core/fuse/difference.h"
 #include "core/pipeline/pipeline.h"
 #include "core/types/survey.h"
@@ -13,8 +15,9 @@
 namespace bathyslam {
 
 struct DifferenceProducts {
-  std::string stem;  // difference_<a>_<b>; nothing written when the map has no cell compared
+  std::string stem;  // difference_<a>_<b>; no file written when the surveys share no cell
   DifferenceMap map;
+  nlohmann::json summary;  // what <stem>.json holds; its "file" is null when no file was written
 };
 
 // The change from survey `before` to survey `after` (0-based) of the result's joined surveys.

@@ -120,7 +120,8 @@ json job_json(const storage::JobRecord& job) {
             {"attempts", job.attempts},
             {"created_at", job.created_at},
             {"started_at", job.started_at},
-            {"finished_at", job.finished_at}};
+            {"finished_at", job.finished_at},
+            {"more_survey_ids", job.more_survey_ids}};
   if (job.error) j["error"] = *job.error;
   return j;
 }
@@ -325,6 +326,19 @@ void HttpApi::add_routes() {
                     return context_.results.file_bytes(id, kCorrectedGsfFile, offset, length);
                   }});
   });
+  // A job of several surveys: the change from its first survey to survey k (map_service's DIFFERENCE).
+  route(R"(/v1/jobs/([0-9]+)/difference_1_([0-9]+)\.tif)",
+        [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
+          const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
+          const std::string name = "difference_1_" + std::string(req.matches[2]) + ".tif";
+          const auto size = context_.results.file_size(job.id, name);
+          if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name);
+          send_product(req, res,
+                       {*size, "image/tiff; application=geotiff; profile=cloud-optimized", etag(job, name, *size),
+                        [this, id = job.id, name](std::int64_t offset, std::int64_t length) {
+                          return context_.results.file_bytes(id, name, offset, length);
+                        }});
+        });
   // The page and its files (web_files.h): public, as any page is; what it shows asks for the token.
   const auto serve_file = [](const std::string& name, httplib::Response& res) {
     const auto file = web_files().find(name);

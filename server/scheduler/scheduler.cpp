@@ -188,7 +188,8 @@ void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds
 // What each stage produced, in the order of the pipeline. Everything an earlier try stored is
 // discarded first, so that the whole sequence can run again after a transient failure.
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-                      const std::optional<std::filesystem::path>& corrected_gsf, const nlohmann::json& failed_products,
+                      const std::optional<std::filesystem::path>& corrected_gsf, const SiteDifferences& differences,
+                      const nlohmann::json& failed_products,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
   storage::ResultStore results = results_.fenced(job.lease);  // nothing lands once the lease is lost
@@ -212,10 +213,17 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
   });
   step("corrected GSF", [&] {
     if (corrected_gsf) results.put_file(id, kCorrectedGsfFile, *corrected_gsf);
+    for (const DifferenceProducts& d : differences.products) {
+      if (d.map.cells_compared > 0) results.put_file(id, d.stem + ".tif", differences.dir / (d.stem + ".tif"));
+    }
   });
   step("report", [&] {
     storage::Report report = report_with_plots(result, options_.scratch);
     report.report["failed_products"] = failed_products;
+    if (!differences.products.empty()) {
+      nlohmann::json& list = report.report["site"]["differences"] = nlohmann::json::array();
+      for (const DifferenceProducts& d : differences.products) list.push_back(d.summary);
+    }
     report.plots.insert(map.plots.begin(), map.plots.end());
     results.save_report(id, report);
   });
@@ -247,17 +255,28 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     const PipelineConfig config = job_config(job, std::max(1, cores / std::max(1, options_.workers)));
     event("load", 0);
-    std::optional<storage::StoredSurveyCopy> files;
-    const auto read = [&](PingSink& sink) {
-      retry_transient(name + ": loading the survey", options_.retry, cancel,
-                      [&] { files.emplace(surveys_, job.survey_id, options_.scratch); });
-      BundleReadResult bundle = files->read(sink);
-      if (!bundle.survey) throw BundleError(std::move(bundle.problems));
-      return std::move(*bundle.survey);
-    };
+    // Its surveys: one, or several of one site joined in one graph (the first is the datum).
+    std::vector<std::int64_t> survey_ids = {job.survey_id};
+    survey_ids.insert(survey_ids.end(), job.more_survey_ids.begin(), job.more_survey_ids.end());
+    std::vector<std::optional<storage::StoredSurveyCopy>> files(survey_ids.size());
+    std::vector<SurveyReader> reads;
+    std::vector<std::string> names;
+    for (std::size_t k = 0; k < survey_ids.size(); ++k) {
+      names.push_back("survey " + std::to_string(survey_ids[k]));
+      reads.push_back([&, k](PingSink& sink) {
+        retry_transient(name + ": loading " + names[k], options_.retry, cancel,
+                        [&] { files[k].emplace(surveys_, survey_ids[k], options_.scratch); });
+        BundleReadResult bundle = files[k]->read(sink);
+        if (!bundle.survey) throw BundleError(std::move(bundle.problems));
+        return std::move(*bundle.survey);
+      });
+    }
     // The map's extent: Finalize checked it too; a survey finalized before the limit existed is
     // checked here.
-    JobInput input = read_job_input(read, config, FuseConfig{.resolution_m = 0, .max_cells = options_.max_map_cells});
+    const FuseConfig fuse{.resolution_m = 0, .max_cells = options_.max_map_cells};
+    std::vector<Survey> site;
+    JobInput input = survey_ids.size() == 1 ? read_job_input(reads.front(), config, fuse)
+                                            : read_site_input(reads, names, config, fuse, site);
     const Survey& survey = input.survey;
     event("load", 1, std::to_string(input.pings) + " pings");
 
@@ -285,7 +304,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     if (input.pings > 0) {
       if (auto failure = optional_product(gsf_dir.path(), [&] {
             write_corrected_gsf(survey, result, gsf_dir.path() / kCorrectedGsfFile,
-                                [&](PingSink& sink) { return files->read(sink); });
+                                [&](PingSink& sink) { return files.front()->read(sink); });
           })) {
         log("job %lld: %s not written: %s", id, kCorrectedGsfFile, failure->c_str());
         event("map", 0.75, std::string(kCorrectedGsfFile) + " not written: " + *failure);
@@ -294,8 +313,16 @@ void Scheduler::run(const storage::ClaimedJob& job) {
         gsf = gsf_dir.path() / kCorrectedGsfFile;
       }
     }
+    // Each later survey's change from the first: difference_1_K.tif stored as a file, its JSON in
+    // the report.
+    const ScratchDir difference_dir(options_.scratch, "difference");
+    std::vector<DifferenceProducts> differences;
+    for (std::size_t k = 1; k < survey_ids.size(); ++k) {
+      differences.push_back(write_difference_products(result, survey.metadata, input.fuse, 0, static_cast<int>(k),
+                                                      DifferenceConfig{}, difference_dir.path()));
+    }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
-      store(job, result, map, gsf, failed_products,
+      store(job, result, map, gsf, {difference_dir.path(), differences}, failed_products,
             [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);

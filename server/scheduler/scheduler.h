@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/products/difference_products.h"
 #include "server/scheduler/map_products.h"
 #include "server/scheduler/retry.h"
 #include "server/storage/job_queue.h"
@@ -48,8 +49,14 @@ class Scheduler {
   void work(const std::string& worker);
   void run(const storage::ClaimedJob& job);
   // `failed_products`: the optional products not written, [{product, reason}], for the report.
+  // The differences of a job of several surveys: each written in `dir` (difference_products.h).
+  struct SiteDifferences {
+    std::filesystem::path dir;
+    std::vector<DifferenceProducts> products;
+  };
   void store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-             const std::optional<std::filesystem::path>& corrected_gsf, const nlohmann::json& failed_products,
+             const std::optional<std::filesystem::path>& corrected_gsf, const SiteDifferences& differences,
+             const nlohmann::json& failed_products,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
   void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,

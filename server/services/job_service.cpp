@@ -1,5 +1,6 @@
 #include "server/services/job_service.h"
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <map>
@@ -33,6 +34,7 @@ v1::JobState to_proto(storage::JobState state) {
 void describe(const storage::JobRecord& job, v1::Job* reply) {
   reply->set_id(job.id);
   reply->set_survey_id(job.survey_id);
+  for (std::int64_t id : job.more_survey_ids) reply->add_more_survey_ids(id);
   reply->set_configuration(job.configuration);
   reply->set_state(to_proto(job.state));
   reply->set_stage(job.stage);
@@ -90,6 +92,29 @@ PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
 
 }  // namespace
 
+std::vector<std::int64_t> JobService::site_surveys(std::int64_t tenant, const storage::SurveyRecord& first,
+                                                   const v1::SubmitJobRequest& request) {
+  if (request.more_survey_ids_size() > kMaxSiteSurveys - 1)
+    throw invalid("more_survey_ids", std::to_string(request.more_survey_ids_size()) + " surveys; a job joins at most " +
+                                         std::to_string(kMaxSiteSurveys) + " with survey_id");
+  std::vector<std::int64_t> ids;
+  for (int k = 0; k < request.more_survey_ids_size(); ++k) {
+    const std::string field = "more_survey_ids[" + std::to_string(k) + "]";
+    const std::int64_t id = request.more_survey_ids(k);
+    if (id == first.id || std::find(ids.begin(), ids.end(), id) != ids.end())
+      throw invalid(field, "survey " + std::to_string(id) + " is already in the job");
+    const storage::SurveyRecord survey = owned_survey(context_, tenant, id, field);
+    if (!survey.ready)
+      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                    field + ": survey " + std::to_string(id) + " is not ready; finalize it without errors first");
+    if (survey.crs != first.crs)
+      throw invalid(field, "survey " + std::to_string(id) + " is in " + survey.crs + ", survey " + std::to_string(first.id) +
+                               " in " + first.crs + ": surveys of one site share a CRS");
+    ids.push_back(id);
+  }
+  return ids;
+}
+
 grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) {
   return handle("SubmitJob", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
@@ -98,7 +123,8 @@ grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJo
     if (!survey.ready)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
                     "survey_id: survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
-    storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts};
+    storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts,
+                        site_surveys(tenant, survey, *request)};
     const std::optional<std::int64_t> queued =
         context_.jobs.enqueue_within_limit(job, tenant, context_.limits.max_active_jobs);
     if (!queued)

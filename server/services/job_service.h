@@ -1,5 +1,8 @@
 #pragma once
 // bathyslam.v1.JobService: submit SLAM jobs, follow them, cancel them, read their reports.
+#include <cstdint>
+#include <vector>
+
 #include "bathyslam/v1/job.grpc.pb.h"
 #include "server/services/job_event_bell.h"
 #include "server/services/service_context.h"
@@ -21,6 +24,10 @@ class JobService final : public v1::JobService::Service {
   grpc::Status GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) override;
 
  private:
+  // A job of several surveys: the others of the request, each the caller's, ready, not twice,
+  // in `first`'s CRS; refused naming more_survey_ids[k].
+  std::vector<std::int64_t> site_surveys(std::int64_t tenant, const storage::SurveyRecord& first,
+                                         const v1::SubmitJobRequest& request);
   ServiceContext& context_;
   JobEventBell& bell_;
   StreamSlots watch_slots_;

@@ -26,15 +26,16 @@ std::string stored_format(v1::TileFormat format) {
 }
 
 // The whole map's formats and the names the tiles table stores them under ("" for the corrected
-// GSF, which job_files holds); unspecified is the COG, as the API says. A value the API does not
+// GSF and the differences, which job_files holds); unspecified is the COG, as the API says. A value the API does not
 // define is refused, as GetTile refuses one, rather than answered with some map.
 std::string stored_map_format(v1::MapFormat format) {
   switch (format) {
     case v1::MAP_FORMAT_UNSPECIFIED:
     case v1::COG: return "cog";
     case v1::BAG: return "bag";
-    case v1::GSF: return "";
-    default: throw invalid("format", "COG, BAG or GSF, not " + std::to_string(static_cast<int>(format)));
+    case v1::GSF:
+    case v1::DIFFERENCE: return "";
+    default: throw invalid("format", "COG, BAG, GSF or DIFFERENCE, not " + std::to_string(static_cast<int>(format)));
   }
 }
 
@@ -150,6 +151,20 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
   return handle("GetMap", call, [&] {
     const storage::JobRecord job = job_with_results(context_, caller_tenant(context_, *call), request->job_id());
     const std::string format = stored_map_format(request->format());
+    if (request->format() == v1::DIFFERENCE) {
+      const int last = 1 + static_cast<int>(job.more_survey_ids.size());
+      if (last == 1) throw invalid("format", "job " + std::to_string(job.id) + " has one survey: nothing to difference");
+      if (request->epoch() < 2 || request->epoch() > last)
+        throw invalid("epoch", std::to_string(request->epoch()) + " is not a later survey of job " + std::to_string(job.id) +
+                                   " (2 to " + std::to_string(last) + ")");
+      const std::string name = "difference_1_" + std::to_string(request->epoch()) + ".tif";
+      const auto size = context_.results.file_size(job.id, name);
+      if (!size)
+        throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name +
+                                                       " (the surveys share no cell of the map: see the report)");
+      stream_file(call, context_, job.id, name, *size, writer);
+      return;
+    }
     if (format.empty()) {
       const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
       if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");

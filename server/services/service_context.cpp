@@ -46,11 +46,12 @@ std::int64_t tenant_of_authorization(const ServiceContext& context, const std::s
   throw Refusal(grpc::StatusCode::UNAUTHENTICATED, "authorization: unknown or revoked token");
 }
 
-storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id) {
-  if (survey_id <= 0) throw invalid("survey_id", "must be positive");
+storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id,
+                                   const std::string& field) {
+  if (survey_id <= 0) throw invalid(field, "must be positive");
   auto survey = context.surveys.survey(survey_id);
   if (!survey || survey->tenant_id != tenant)
-    throw Refusal(grpc::StatusCode::NOT_FOUND, "survey_id: no survey " + std::to_string(survey_id));
+    throw Refusal(grpc::StatusCode::NOT_FOUND, field + ": no survey " + std::to_string(survey_id));
   return *survey;
 }
 

@@ -62,6 +62,9 @@ Refusal invalid(const std::string& field, const std::string& message);
 // hold (about 2.7 kB a row), so that a long name is the client's error, not the database's.
 inline constexpr std::size_t kMaxNameBytes = 255;
 
+// Surveys one job may join (issue 33: 20 surveys of one site in one job).
+inline constexpr int kMaxSiteSurveys = 20;
+
 // Text a request carries that the server stores, looks up or passes on: refused with
 // INVALID_ARGUMENT naming `field` when it holds a NUL byte, which libpq and PostgreSQL would cut
 // it at (or refuse), so that "nav.csv\0x" never answers for "nav.csv".
@@ -78,7 +81,8 @@ std::int64_t tenant_of_authorization(const ServiceContext& context, const std::s
 
 // The survey / job if it exists and belongs to the tenant; NOT_FOUND otherwise (another
 // tenant's ids are indistinguishable from unknown ones).
-storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id);
+storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id,
+                                   const std::string& field = "survey_id");
 storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
 // owned_job for the calls that serve a job's results (map, tiles, trajectory, report): a
 // cancelled job's are never served, FAILED_PRECONDITION, whatever a cancel during the store

@@ -78,15 +78,36 @@ int active_jobs_of(Connection& connection, std::int64_t tenant_id) {
                               .int64(0, "active"));
 }
 
+// The ids of `list`, comma-separated ("" for none), as a job's more_survey_ids are read.
+std::vector<std::int64_t> ids_of(std::string_view list) {
+  std::vector<std::int64_t> ids;
+  while (!list.empty()) {
+    const std::size_t comma = std::min(list.find(','), list.size());
+    ids.push_back(std::stoll(std::string(list.substr(0, comma))));
+    list.remove_prefix(std::min(comma + 1, list.size()));
+  }
+  return ids;
+}
+
+constexpr std::string_view kMoreSurveyIds =
+    "coalesce((SELECT string_agg(survey_id::text, ',' ORDER BY position) FROM job_surveys WHERE job_id = j.id), '')"
+    " AS more_survey_ids";
+
+// In the caller's transaction when it has one: the job and its other surveys together.
 std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohmann::json& parameters) {
   // NOTIFY is delivered at commit, so a woken worker always finds the job.
-  return connection
-      .exec(
-          "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts)"
-          " VALUES ($1, $2, $3, $4) RETURNING id)"
-          " SELECT id, pg_notify($5, id::text) FROM job",
-          {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
-      .int64(0, "id");
+  const std::int64_t id = connection
+                              .exec(
+                                  "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts)"
+                                  " VALUES ($1, $2, $3, $4) RETURNING id)"
+                                  " SELECT id, pg_notify($5, id::text) FROM job",
+                                  {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
+                              .int64(0, "id");
+  for (std::size_t k = 0; k < job.more_survey_ids.size(); ++k) {
+    connection.exec("INSERT INTO job_surveys (job_id, position, survey_id) VALUES ($1, $2, $3)",
+                    {id, static_cast<std::int64_t>(k + 1), job.more_survey_ids[k]});
+  }
+  return id;
 }
 
 }  // namespace
@@ -94,7 +115,10 @@ std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohman
 std::int64_t JobQueue::enqueue(const NewJob& job) {
   const nlohmann::json parameters = checked_parameters(job);
   auto connection = pool_.acquire();
-  return insert_job(*connection, job, parameters);
+  Transaction transaction(*connection);
+  const std::int64_t id = insert_job(*connection, job, parameters);
+  transaction.commit();
+  return id;
 }
 
 std::optional<std::int64_t> JobQueue::enqueue_within_limit(const NewJob& job, std::int64_t tenant_id, int max_active) {
@@ -127,6 +151,9 @@ std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
   job.survey_id = row.int64(0, "survey_id");
   job.configuration = row.text(0, "configuration");
   job.parameters = nlohmann::json::parse(row.text(0, "parameters"));
+  job.more_survey_ids = ids_of(connection->exec("SELECT " + std::string(kMoreSurveyIds) + " FROM jobs j WHERE j.id = $1",
+                                                {job.lease.job_id})
+                                   .text(0, "more_survey_ids"));
   return job;
 }
 
@@ -281,12 +308,13 @@ JobStatus JobQueue::status(std::int64_t job_id) {
 
 namespace {
 
-constexpr std::string_view kJobColumns =
+const std::string kJobColumns =
     "SELECT j.id, j.survey_id, s.tenant_id, j.configuration, j.state, j.attempts, j.error, j.parameters,"
     " extract(epoch FROM j.created_at)::float8 AS created_at,"
     " coalesce(extract(epoch FROM j.started_at)::float8, 0) AS started_at,"
     " coalesce(extract(epoch FROM j.finished_at)::float8, 0) AS finished_at,"
-    " coalesce(e.stage, '') AS stage, coalesce(e.progress, 0) AS progress"
+    " coalesce(e.stage, '') AS stage, coalesce(e.progress, 0) AS progress, " +
+    std::string(kMoreSurveyIds) +
     " FROM jobs j JOIN surveys s ON s.id = j.survey_id"
     " LEFT JOIN LATERAL (SELECT stage, progress FROM job_events WHERE job_id = j.id ORDER BY id DESC LIMIT 1) e ON true";
 
@@ -307,6 +335,7 @@ std::vector<JobRecord> job_records(const Result& rows) {
     job.finished_at = rows.float8(row, "finished_at");
     job.stage = rows.text(row, "stage");
     job.progress = rows.float8(row, "progress");
+    job.more_survey_ids = ids_of(rows.text(row, "more_survey_ids"));
     jobs.push_back(std::move(job));
   }
   return jobs;
@@ -316,7 +345,7 @@ std::vector<JobRecord> job_records(const Result& rows) {
 
 std::optional<JobRecord> JobQueue::job(std::int64_t job_id) {
   auto connection = pool_.acquire();
-  std::vector<JobRecord> found = job_records(connection->exec(std::string(kJobColumns) + " WHERE j.id = $1", {job_id}));
+  std::vector<JobRecord> found = job_records(connection->exec(kJobColumns + " WHERE j.id = $1", {job_id}));
   if (found.empty()) return std::nullopt;
   return found.front();
 }
@@ -325,7 +354,7 @@ std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional
                                            std::int64_t before_id, int limit) {
   auto connection = pool_.acquire();
   return job_records(connection->exec(
-      std::string(kJobColumns) +
+      kJobColumns +
           " WHERE s.tenant_id = $1 AND ($2::bigint IS NULL OR j.survey_id = $2) AND ($3::bigint = 0 OR j.id < $3)"
           " ORDER BY j.id DESC LIMIT $4",
       {tenant_id, survey_id, before_id, limit}));

@@ -36,6 +36,8 @@ struct NewJob {
   std::string configuration;  // odometry, gicp or mchs
   nlohmann::json parameters = nlohmann::json::object();  // the effective parameters
   int max_attempts = 3;
+  // Several surveys of one site (issue 33): the others, joined after survey_id in this order.
+  std::vector<std::int64_t> more_survey_ids = {};
 };
 
 // One claim of one job. The attempt number tells a worker's claim apart from a later one of the
@@ -63,6 +65,7 @@ class LeaseLost : public std::runtime_error {
 struct ClaimedJob {
   Lease lease;
   std::int64_t survey_id = 0;
+  std::vector<std::int64_t> more_survey_ids;
   std::string configuration;
   nlohmann::json parameters;
 };
@@ -89,6 +92,7 @@ struct JobEvent {
 struct JobRecord {
   std::int64_t id = 0;
   std::int64_t survey_id = 0;
+  std::vector<std::int64_t> more_survey_ids;
   std::int64_t tenant_id = 0;
   std::string configuration;
   JobState state = JobState::kQueued;

@@ -301,7 +301,13 @@ std::optional<Validation> SurveyStore::validation(std::int64_t survey_id) {
 
 bool SurveyStore::delete_survey(std::int64_t survey_id) {
   auto connection = pool_.acquire();
-  return connection->exec("DELETE FROM surveys WHERE id = $1", {survey_id}).affected() == 1;
+  Transaction transaction(*connection);
+  // Its jobs go with it, as those it is the first survey of do by the foreign key's cascade, and
+  // so do the jobs of several surveys that joined it.
+  connection->exec("DELETE FROM jobs WHERE id IN (SELECT job_id FROM job_surveys WHERE survey_id = $1)", {survey_id});
+  const bool deleted = connection->exec("DELETE FROM surveys WHERE id = $1", {survey_id}).affected() == 1;
+  transaction.commit();
+  return deleted;
 }
 
 std::int64_t SurveyStore::create_survey(std::int64_t tenant_id, const std::string& name, const std::string& crs,

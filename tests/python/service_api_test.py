@@ -339,7 +339,7 @@ class ServiceApiTest(unittest.TestCase):
         for unknown in (7, -1):  # a format the API does not define is refused, not answered with the COG
             details = self.assert_code(grpc.StatusCode.INVALID_ARGUMENT, lambda r, **kw: list(self.maps.GetMap(r, **kw)),
                                        map_pb2.GetMapRequest(job_id=job.id, format=unknown))
-            self.assertEqual(details, f"format: COG, BAG or GSF, not {unknown}")
+            self.assertEqual(details, f"format: COG, BAG, GSF or DIFFERENCE, not {unknown}")
 
         # Deleting the survey deletes its jobs and results.
         self.surveys.DeleteSurvey(survey_pb2.DeleteSurveyRequest(survey_id=survey_id), timeout=30)

@@ -14,7 +14,7 @@ from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb
 CHUNK = 1 << 20  # the API's largest chunk
 BUNDLE_FILES = ("survey.json", "nav.csv", "pings.csv", "reference_nav.csv")
 SONAR_EXTENSIONS = (".gsf", ".all", ".xtf")
-FORMATS = {"cog": map_pb2.COG, "bag": map_pb2.BAG, "gsf": map_pb2.GSF}
+FORMATS = {"cog": map_pb2.COG, "bag": map_pb2.BAG, "gsf": map_pb2.GSF, "difference": map_pb2.DIFFERENCE}
 FINISHED = {job_pb2.SUCCEEDED: "succeeded", job_pb2.FAILED: "failed", job_pb2.CANCELLED: "cancelled"}
 
 
@@ -23,7 +23,8 @@ def _job(job):
     return {"id": job.id, "survey_id": job.survey_id, "configuration": job.configuration,
             "state": job_pb2.JobState.Name(job.state).lower(), "stage": job.stage, "progress": job.progress,
             "attempts": job.attempts, "error": job.error, "created_at": job.created_at, "started_at": job.started_at,
-            "finished_at": job.finished_at, "parameters": dict(job.parameters)}
+            "finished_at": job.finished_at, "parameters": dict(job.parameters),
+            "more_survey_ids": list(job.more_survey_ids)}
 
 
 def _sha256(path):
@@ -159,10 +160,12 @@ class Client:
 
     # Jobs
 
-    def submit(self, survey_id, config="mchs", parameters=None):
-        """Queues a SLAM job (odometry, gicp or mchs; `parameters` overrides by name); its id."""
+    def submit(self, survey_id, config="mchs", parameters=None, more_survey_ids=()):
+        """Queues a SLAM job (odometry, gicp or mchs; `parameters` overrides by name); its id.
+        `more_survey_ids`: other surveys of the site, joined with `survey_id` (the datum) in one graph."""
         request = job_pb2.SubmitJobRequest(survey_id=survey_id, configuration=config,
-                                           parameters={k: str(v) for k, v in (parameters or {}).items()})
+                                           parameters={k: str(v) for k, v in (parameters or {}).items()},
+                                           more_survey_ids=list(more_survey_ids))
         return self._call("SubmitJob", self._jobs.SubmitJob, request).id
 
     def job(self, job_id):
@@ -194,15 +197,16 @@ class Client:
         reply = self._call("GetReport", self._jobs.GetReport, job_pb2.GetReportRequest(job_id=job_id))
         return json.loads(reply.report_json)
 
-    def download_map(self, job_id, path, format="cog"):
-        """Writes the job's map to `path`: "cog" (GeoTIFF), "bag" or "gsf" (the pings with the
-        corrected navigation); written to a temporary name first, so `path` is whole or absent."""
+    def download_map(self, job_id, path, format="cog", epoch=2):
+        """Writes the job's map to `path`: "cog" (GeoTIFF), "bag", "gsf" (the pings with the
+        corrected navigation) or "difference" (a job of several surveys: the change from the first
+        to survey `epoch`, 2 to N); written to a temporary name first, so `path` is whole or absent."""
         if format not in FORMATS:
             raise ValueError(f"download_map: format must be one of {sorted(FORMATS)}, not {format!r}")
         partial = path + ".part"
         try:
             with open(partial, "wb") as out:
-                for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format]),
+                for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format], epoch=epoch),
                                                timeout=3600, metadata=self._metadata):
                     out.write(chunk.data)
         except BaseException as error:  # a refusal, a full disk, Ctrl-C: no half file stays

@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""Jobs of several surveys of one site (issue 33) against a real server and PostgreSQL: two
+epochs of `small` joined in one `mchs` job, stored and served like a single survey's job (its
+report's site section, the difference map by GetMap, the datum edge among its constraints), and
+every refusal of a survey list (another tenant's survey, a survey twice, one not ready, another CRS,
+too many) answered naming the field with the database unchanged. The same environment as
+service_api_test.py (set by ctest)."""
+import json
+import os
+import subprocess
+import unittest
+
+import grpc
+from osgeo import gdal
+
+from http_api_test import HttpServer
+from service_api_test import STUBS, database_fingerprint, psql, restart_asking_for_tokens, survey_pb2
+
+import bathyslam  # noqa: E402  (the Python client, on the path service_api_test puts)
+
+gdal.UseExceptions()
+
+
+def simulate_epoch(epoch):
+    out = os.path.join(STUBS, f"site-epoch{epoch}")
+    if not os.path.exists(os.path.join(out, "survey.json")):
+        subprocess.run([os.environ["BATHYSLAM"], "simulate", "--scenario", "small", "--seed", "1", "--epoch", str(epoch),
+                        "--out", out], check=True, capture_output=True)
+    return out
+
+
+class SiteJobsTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = HttpServer(dev_tenant="owner")
+        with bathyslam.Client(cls.server.address) as client:
+            cls.first = client.upload(simulate_epoch(1))
+            cls.second = client.upload(simulate_epoch(2))
+            cls.single = client.submit(cls.first, "odometry")
+            client.watch(cls.single)
+        cls.tokens = restart_asking_for_tokens(cls.server)
+        cls.owner = bathyslam.Client(cls.server.address, cls.tokens["owner"])
+        cls.intruder = bathyslam.Client(cls.server.address, cls.tokens["another tenant"])
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.owner.close()
+        cls.intruder.close()
+        if os.environ.get("SHOW_SERVER_LOG"):
+            print(cls.server.server_log())
+        cls.server.stop()
+
+    def refused(self, client, more, code, message, survey=None):
+        before = database_fingerprint(self.server.url)
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            client.submit(survey or self.first, "mchs", more_survey_ids=more)
+        self.assertEqual(raised.exception.code, code, raised.exception)
+        self.assertRegex(str(raised.exception), message)
+        self.assertEqual(database_fingerprint(self.server.url), before, f"{more}: the database changed")
+
+    def test_refusals_name_the_field_and_change_nothing(self):
+        self.refused(self.owner, [self.first], grpc.StatusCode.INVALID_ARGUMENT,
+                     rf"more_survey_ids\[0\]: survey {self.first} is already in the job")
+        self.refused(self.owner, [self.second, self.second], grpc.StatusCode.INVALID_ARGUMENT,
+                     rf"more_survey_ids\[1\]: survey {self.second} is already in the job")
+        self.refused(self.owner, [self.second, 999999], grpc.StatusCode.NOT_FOUND, r"more_survey_ids\[1\]: no survey 999999")
+        self.refused(self.owner, list(range(1000, 1020)), grpc.StatusCode.INVALID_ARGUMENT,
+                     r"more_survey_ids: 20 surveys; a job joins at most 20")
+        # Another tenant: neither its own job with the owner's survey, nor one of the owner's.
+        theirs = self.intruder._call("CreateSurvey", self.intruder._surveys.CreateSurvey,
+                                     survey_pb2.CreateSurveyRequest(name="theirs", crs="EPSG:32651")).id
+        self.refused(self.owner, [theirs], grpc.StatusCode.NOT_FOUND, rf"more_survey_ids\[0\]: no survey {theirs}")
+        self.refused(self.intruder, [self.second], grpc.StatusCode.NOT_FOUND, rf"survey_id: no survey {self.first}")
+        # Not ready, and another CRS.
+        empty = self.owner._call("CreateSurvey", self.owner._surveys.CreateSurvey,
+                                 survey_pb2.CreateSurveyRequest(name="not ready", crs="EPSG:32651")).id
+        self.refused(self.owner, [empty], grpc.StatusCode.FAILED_PRECONDITION, rf"more_survey_ids\[0\]: survey {empty} is not ready")
+        psql(self.server.url, f"UPDATE surveys SET crs = 'EPSG:32650' WHERE id = {self.second}")
+        try:
+            self.refused(self.owner, [self.second], grpc.StatusCode.INVALID_ARGUMENT,
+                         rf"more_survey_ids\[0\]: survey {self.second} is in EPSG:32650, survey {self.first} in EPSG:32651")
+        finally:
+            psql(self.server.url, f"UPDATE surveys SET crs = 'EPSG:32651' WHERE id = {self.second}")
+
+    def test_two_epochs_in_one_job(self):
+        job = self.owner.submit(self.first, "mchs", more_survey_ids=[self.second])
+        self.assertEqual(self.owner.job(job)["more_survey_ids"], [self.second])
+        self.assertEqual(self.owner.watch(job)["state"], "succeeded")
+        report = self.owner.report(job)
+        site = report["site"]
+        self.assertEqual([s["submaps"] for s in site["surveys"]][0], site["surveys"][1]["first_submap"])
+        self.assertGreater(site["surveys"][1]["registrations_with_other_surveys"]["accepted"], 0)
+        across = site["consistency_error_m"]["across_surveys"]
+        self.assertLess(across["optimized"]["rmse"], 0.5 * across["dead_reckoning"]["rmse"])
+        difference = site["differences"][0]
+        self.assertEqual((difference["before"], difference["after"], difference["file"]), (1, 2, "difference_1_2.tif"))
+        self.assertGreater(difference["cells_compared"], 1000)
+        self.assertLess(abs(difference["changed_areas"][0]["largest_change_m"] + 0.3), 0.1, "the dredged area")
+        # The difference map as a GeoTIFF GDAL reads; a survey that is not in the job is refused.
+        path = self.owner.download_map(job, os.path.join(STUBS, "difference.tif"), format="difference", epoch=2)
+        tif = gdal.Open(path)
+        self.assertEqual([tif.GetRasterBand(b).GetDescription() for b in range(1, 5)],
+                         ["change", "sigma", "significant", "local_offset"])
+        connection = self.server.connection()  # the same bytes over HTTP
+        connection.request("GET", f"/v1/jobs/{job}/difference_1_2.tif", headers={"Authorization": "Bearer " + self.tokens["owner"]})
+        response = connection.getresponse()
+        with open(path, "rb") as f:
+            self.assertEqual((response.status, response.read()), (200, f.read()))
+        connection.close()
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            self.owner.download_map(job, os.path.join(STUBS, "x.tif"), format="difference", epoch=3)
+        self.assertRegex(str(raised.exception), r"epoch: 3 is not a later survey of job \d+ \(2 to 2\)")
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            self.owner.download_map(self.single, os.path.join(STUBS, "x.tif"), format="difference")
+        self.assertRegex(str(raised.exception), r"format: job \d+ has one survey")
+        # Stored like any job: its datum edge among the constraints, and listed with its first survey.
+        self.assertEqual(psql(self.server.url, f"SELECT count(*) FROM constraints WHERE job_id = {job} AND type = 'datum'"), "1")
+        with self.assertRaises(bathyslam.BathyslamError):
+            self.intruder.download_map(job, os.path.join(STUBS, "x.tif"), format="difference")
+        # Deleting the second survey takes the job with it.
+        self.owner._call("DeleteSurvey", self.owner._surveys.DeleteSurvey, survey_pb2.DeleteSurveyRequest(survey_id=self.second))
+        self.assertEqual(psql(self.server.url, f"SELECT count(*) FROM jobs WHERE id = {job}"), "0")
+        self.assertEqual(psql(self.server.url, f"SELECT count(*) FROM jobs WHERE id = {self.single}"), "1")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
