@@ -24,6 +24,8 @@ struct SimulateOptions {
   std::optional<double> wavelength_m;
   std::optional<double> wave_angle_deg;
   int epoch = 0;
+  std::optional<int> beams;
+  std::optional<double> swath_deg;
   std::string format = "bundle";
   std::string out;
 };
@@ -77,6 +79,8 @@ void run_simulate(const SimulateOptions& o) {
   config.line_spacing_m = o.line_spacing_m;
   config.altitude_m = o.altitude_m;
   config.epoch = o.epoch;
+  if (o.beams) config.sonar.beams = *o.beams;
+  if (o.swath_deg) config.sonar.swath_deg = *o.swath_deg;
 
   const auto start = std::chrono::steady_clock::now();
   const sim::Simulation simulation = sim::simulate(config);
@@ -149,6 +153,8 @@ void add_simulate_command(CLI::App& app) {
                   "the site's k-th survey (1, 2, ...): the same seabed, changed after epoch 1, flown on other lines with "
                   "its own drift and start fix; 0: a survey alone")
       ->check(CLI::Range(0, 1000));
+  cmd->add_option("--beams", options->beams, "the sonar's beams (512): another vehicle's sonar")->check(CLI::Range(16, 4096));
+  cmd->add_option("--swath", options->swath_deg, "the sonar's swath in degrees (140)")->check(CLI::Range(10.0, 170.0));
   cmd->add_option("--format", options->format,
                   "bundle (nav.csv, pings.csv, ...) or gsf (survey.gsf and reference_nav.csv)")
       ->check(CLI::IsMember({"bundle", "gsf"}))

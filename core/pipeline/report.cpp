@@ -373,6 +373,7 @@ std::string report_text(const PipelineResult& r) {
     if (part.trajectory) {
       summary += format(", trajectory rmse %.2f m (dead reckoning %.2f m)", part.trajectory->rmse, part.trajectory_dr->rmse);
     }
+    if (part.cross_accepted == 0) summary += ": no registration with another survey accepted, it stays where its navigation and start fix put it";
     summary += "\n";
   }
   if (const auto why = consistency_not_computed(r)) {
