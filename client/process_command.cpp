@@ -93,8 +93,10 @@ void print_difference(const DifferenceProducts& d, double k_sigma) {
   }
 }
 
+// Several bundles (folders or .tar files) are several surveys; several sonar files are one.
 bool is_site(const ProcessOptions& o) {
-  return o.survey.inputs.size() > 1 && std::filesystem::is_directory(o.survey.inputs.front());
+  const std::filesystem::path first = o.survey.inputs.front();
+  return o.survey.inputs.size() > 1 && (std::filesystem::is_directory(first) || first.extension() == ".tar");
 }
 
 void run_process(const ProcessOptions& o) {
@@ -141,6 +143,7 @@ void run_process(const ProcessOptions& o) {
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
   if (o.export_gsf && site.empty()) export_gsf(o, survey, result, corrected);
+  if (o.export_gsf && !site.empty()) std::printf("--export-gsf: not written for several surveys (not yet)\n");
   if (o.export_soundings) {
     const std::uint64_t n =
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");

@@ -6,6 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/submaps/joined_surveys.h"
+
 namespace bathyslam {
 namespace {
 
@@ -30,6 +32,8 @@ std::vector<int64_t> cells_of(const Footprint& f) {
 }  // namespace
 
 bool on_adjacent_lines(const SubmapSet& set, int a, int b, const CandidateConfig& config) {
+  // Two surveys' lines are numbered on (join_surveys), not laid side by side.
+  if (survey_of_submap(set, a) != survey_of_submap(set, b)) return false;
   const int la = set.submaps[a].line, lb = set.submaps[b].line;
   if (la < 0 || lb < 0 || la == lb || std::abs(la - lb) > config.k_adjacent_lines) return false;
   double d = std::fmod(std::abs(set.lines[la].course_deg - set.lines[lb].course_deg), 180.0);
@@ -113,7 +117,8 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                            const CandidateConfig& config, LaterSubmaps later) {
   return overlapping_pairs(set, poses, config.min_overlap_fraction, later, [&](int a, int b) {
-    return std::abs(a - b) >= config.loop_min_submap_gap && !on_adjacent_lines(set, a, b, config);
+    const bool apart = std::abs(a - b) >= config.loop_min_submap_gap || survey_of_submap(set, a) != survey_of_submap(set, b);
+    return apart && !on_adjacent_lines(set, a, b, config);
   });
 }
 

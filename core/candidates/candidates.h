@@ -39,8 +39,8 @@ struct CandidateConfig {
   }
 };
 
-// Whether submaps `a` and `b` lie on distinct survey lines at most K apart that run parallel or
-// antiparallel (the pairs the `gicp` configuration registers).
+// Whether submaps `a` and `b` lie on distinct survey lines of one survey at most K apart that run
+// parallel or antiparallel (the pairs the `gicp` configuration registers).
 bool on_adjacent_lines(const SubmapSet& set, int a, int b, const CandidateConfig& config);
 
 struct CandidatePair {
@@ -64,7 +64,7 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
 
 // Loop-closure candidates: pairs whose footprints (at `poses`) overlap enough but that are not
 // on K-adjacent parallel lines (check lines crossing the lawnmower, revisits, turns), and are
-// far enough apart in time.
+// far enough apart in time; every overlapping pair of two surveys of one site (join_surveys).
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                            const CandidateConfig& config = {}, LaterSubmaps later = {});
 

@@ -22,6 +22,7 @@ struct JobInput {
   FuseConfig fuse;  // with its cell size chosen
   std::size_t pings = 0;
   double read_seconds = 0;  // the "submaps" stage's time (run_pipeline)
+  double sounding_reach_m = 0;  // how far from the vehicle a sounding landed (the map's extent)
 };
 
 // Streams a survey's pings into the sink it is given and returns the survey; throws naming the
@@ -36,7 +37,8 @@ JobInput read_job_input(const SurveyReader& read, const PipelineConfig& config, 
 // Several surveys of one site: each read as read_job_input reads one, their submaps joined in
 // the order given (join_surveys), the map's cell the finest any of them asks for; `surveys`
 // receives each survey without its soundings, and the input's `survey` is the first's. Throws
-// std::runtime_error naming `names[k]` when survey k's CRS is not the first's.
+// std::runtime_error naming `names[k]` when survey k's CRS is not the first's, and when the
+// surveys' joined map would exceed `fuse.max_cells`.
 JobInput read_site_input(const std::vector<SurveyReader>& reads, const std::vector<std::string>& names,
                          const PipelineConfig& config, const FuseConfig& fuse, std::vector<Survey>& surveys);
 

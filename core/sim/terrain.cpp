@@ -175,7 +175,6 @@ void Terrain::sample_seabed(const TerrainConfig& config, const Area& area) {
   for (float& e : elevation_) e += sediment(rng);
 }
 
-// Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
 void Terrain::change(const std::function<double(double x, double y)>& delta_m) {
   for (int j = 0; j < rows_; ++j) {
     for (int i = 0; i < cols_; ++i) {
@@ -186,6 +185,7 @@ void Terrain::change(const std::function<double(double x, double y)>& delta_m) {
   max_slope_ = steepest_slope();
 }
 
+// Steepest per-axis slope; the directional slope of the bilinear surface is at most their sum.
 double Terrain::steepest_slope() const {
   float steepest = 0;
   for (int j = 0; j + 1 < rows_; ++j) {

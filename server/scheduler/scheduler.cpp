@@ -277,6 +277,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     std::vector<Survey> site;
     JobInput input = survey_ids.size() == 1 ? read_job_input(reads.front(), config, fuse)
                                             : read_site_input(reads, names, config, fuse, site);
+    // Only the first survey is read again (its corrected GSF): the others' copies go now.
+    for (std::size_t k = 1; k < files.size(); ++k) files[k].reset();
     const Survey& survey = input.survey;
     event("load", 1, std::to_string(input.pings) + " pings");
 
@@ -318,8 +320,15 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const ScratchDir difference_dir(options_.scratch, "difference");
     std::vector<DifferenceProducts> differences;
     for (std::size_t k = 1; k < survey_ids.size(); ++k) {
-      differences.push_back(write_difference_products(result, survey.metadata, input.fuse, 0, static_cast<int>(k),
-                                                      DifferenceConfig{}, difference_dir.path()));
+      // As the corrected GSF: a difference that cannot be written is reported, the map stands.
+      if (auto failure = optional_product(difference_dir.path(), [&] {
+            differences.push_back(write_difference_products(result, survey.metadata, input.fuse, 0, static_cast<int>(k),
+                                                            DifferenceConfig{}, difference_dir.path()));
+          })) {
+        const std::string product = "difference_1_" + std::to_string(k + 1);
+        log("job %lld: %s not written: %s", id, product.c_str(), failure->c_str());
+        failed_products.push_back({{"product", product}, {"reason", *failure}});
+      }
     }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
       store(job, result, map, gsf, {difference_dir.path(), differences}, failed_products,

@@ -137,11 +137,12 @@ std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
   auto connection = pool_.acquire();
   // SKIP LOCKED: concurrent claimers each take a different row instead of queueing on one.
   Result row = connection->exec(
-      "UPDATE jobs SET state = 'running', attempts = attempts + 1, worker = $1,"
+      "UPDATE jobs AS j SET state = 'running', attempts = attempts + 1, worker = $1,"
       " started_at = coalesce(started_at, now()), heartbeat_at = now(),"
       " lease_expires_at = now() + make_interval(secs => $2)"
       " WHERE id = (SELECT id FROM jobs WHERE state = 'queued' ORDER BY id LIMIT 1 FOR UPDATE SKIP LOCKED)"
-      " RETURNING id, survey_id, configuration, parameters, attempts",
+      " RETURNING id, survey_id, configuration, parameters, attempts, " +
+          std::string(kMoreSurveyIds),
       {worker, seconds(options_.lease)});
   if (row.rows() == 0) return std::nullopt;
   ClaimedJob job;
@@ -151,9 +152,7 @@ std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
   job.survey_id = row.int64(0, "survey_id");
   job.configuration = row.text(0, "configuration");
   job.parameters = nlohmann::json::parse(row.text(0, "parameters"));
-  job.more_survey_ids = ids_of(connection->exec("SELECT " + std::string(kMoreSurveyIds) + " FROM jobs j WHERE j.id = $1",
-                                                {job.lease.job_id})
-                                   .text(0, "more_survey_ids"));
+  job.more_survey_ids = ids_of(row.text(0, "more_survey_ids"));
   return job;
 }
 

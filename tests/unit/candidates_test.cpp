@@ -1,4 +1,5 @@
 #include "core/candidates/candidates.h"
+#include "core/submaps/joined_surveys.h"
 
 #include <gtest/gtest.h>
 
@@ -84,6 +85,31 @@ TEST(Candidates, ABatchFindsTheWholeSearchsPairsEndingInIt) {
 // Against where the soundings really are: every pair of submaps on adjacent lines whose
 // soundings share a good part of their cells is a candidate, and no candidate is a pair whose
 // soundings share (next to) nothing.
+// Two surveys of one site: their lines are numbered on (join_surveys), so the first survey's last
+// lines and the second's first look like neighbours by number. A pair across the surveys is never
+// an adjacent-line pair; it is a loop candidate however close their indices.
+TEST(Candidates, PairsAcrossTwoSurveysAreLoopsNeverAdjacentLines) {
+  SubmapSet set = true_submaps();
+  const auto poses = poses_of(set);
+  const CandidateConfig config;
+  const PairSet one_survey = pair_set(adjacent_line_candidates(set, poses, config));
+  // The second survey starts at the first submap of the middle line.
+  int start = 0;
+  const int middle = set.submaps[set.submaps.size() / 2].line;
+  while (set.submaps[start].line != middle) ++start;
+  set.survey_starts = {start};
+  PairSet across;
+  for (const auto& [a, b] : one_survey) {
+    if (a < start && b >= start) across.insert({a, b});
+  }
+  ASSERT_GT(across.size(), 0u);
+  for (const CandidatePair& p : adjacent_line_candidates(set, poses, config)) {
+    EXPECT_EQ(survey_of_submap(set, p.target), survey_of_submap(set, p.source)) << p.target << "-" << p.source;
+  }
+  const PairSet loops = pair_set(loop_candidates(set, poses, config));
+  for (const auto& pair : across) EXPECT_TRUE(loops.contains(pair)) << pair.first << "-" << pair.second;
+}
+
 TEST(Candidates, FindEveryTrulyOverlappingAdjacentLinePairAndNoOther) {
   const SubmapSet& set = true_submaps();
   const CandidateConfig config;
