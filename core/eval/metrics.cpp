@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "core/graph/pose_graph.h"
+#include "core/types/survey_starts.h"
 
 namespace bathyslam {
 
@@ -117,8 +118,7 @@ SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::
   std::vector<int> survey_of_line(set.lines.size(), 0);
   for (const Submap& s : set.submaps) {
     if (s.line >= 0) {
-      survey_of_line.at(s.line) = static_cast<int>(std::upper_bound(set.survey_starts.begin(), set.survey_starts.end(), s.index) -
-                                                   set.survey_starts.begin());
+      survey_of_line.at(s.line) = survey_of(set.survey_starts, s.index);
     }
   }
   const std::size_t surveys = set.survey_starts.size() + 1;

@@ -4,15 +4,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/submaps/joined_surveys.h"
+#include "core/types/median.h"
+
 namespace bathyslam {
 namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // 1.4826 · median |x|: the spread of the bulk about zero, whatever the few outliers. About zero,
 // not about the median: a registration's vertical offset and, on a slope, its horizontal one move
@@ -163,10 +159,9 @@ std::vector<float> local_offsets(const std::vector<float>& change, const GridGeo
 }  // namespace
 
 GridRaster fuse_survey(const SubmapSet& set, std::span<const Eigen::Isometry3d> poses, int survey, const FuseConfig& config) {
-  const std::size_t first = survey > 0 ? set.survey_starts.at(survey - 1) : 0;
-  const std::size_t end = survey < static_cast<int>(set.survey_starts.size()) ? set.survey_starts[survey] : set.submaps.size();
+  const NodeRange own = survey_submaps(set, survey);
   GridFuser fuser(set.origin, config);
-  for (std::size_t i = first; i < end; ++i) {
+  for (int i = own.begin; i < own.end; ++i) {
     if (set.submaps[i].line >= 0) fuser.add(set.submaps[i].points, poses[i]);
   }
   return fuser.raster();

@@ -47,14 +47,9 @@ Information6 odometry_information(const GraphConfig& config, int k) {
   return information_from_sigmas(config.dr_sigma_translation_m, config.rotation_sigma_of_step(k));
 }
 
-bool GraphConfig::has_step(int k) const {
-  return !std::binary_search(survey_starts.begin(), survey_starts.end(), k + 1);
-}
+bool GraphConfig::has_step(int k) const { return same_survey(k, k + 1); }
 
-bool GraphConfig::same_survey(int a, int b) const {
-  return std::upper_bound(survey_starts.begin(), survey_starts.end(), a) ==
-         std::upper_bound(survey_starts.begin(), survey_starts.end(), b);
-}
+bool GraphConfig::same_survey(int a, int b) const { return survey_of(survey_starts, a) == survey_of(survey_starts, b); }
 
 Information6 datum_information(const GraphConfig& config) {
   return information_from_sigmas(std::sqrt(2.0) * config.start_sigma_translation_m,

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include "core/types/fields.h"
+#include "core/types/survey_starts.h"
 
 namespace bathyslam {
 

@@ -6,6 +6,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/types/median.h"
+
 namespace bathyslam {
 namespace {
 
@@ -26,12 +28,6 @@ Eigen::Isometry3d rigid_fit(const std::vector<Eigen::Vector3d>& source, const st
 bool degenerate(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& sample) {
   const Eigen::Vector3d a = points[sample[1]] - points[sample[0]], b = points[sample[2]] - points[sample[0]];
   return a.cross(b).norm() < 0.5;  // twice the triangle's area, m^2
-}
-
-double median(std::vector<double> v) {
-  const std::size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  return v[mid];
 }
 
 // Largest distance between where `a` and `b` put any of the points.

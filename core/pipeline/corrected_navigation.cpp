@@ -3,19 +3,18 @@
 #include <algorithm>
 #include <span>
 
+#include "core/submaps/joined_surveys.h"
 #include "core/types/pose.h"
 
 namespace bathyslam {
 
 std::vector<NavSample> corrected_navigation(const Survey& survey, const PipelineResult& r, int survey_index) {
-  const std::vector<int>& starts = r.submaps.survey_starts;
-  const std::size_t first = survey_index > 0 ? starts.at(survey_index - 1) : 0;
-  const std::size_t last = survey_index < static_cast<int>(starts.size()) ? starts[survey_index] : r.submaps.submaps.size();
-  const std::span<const Submap> submaps(r.submaps.submaps.data() + first, last - first);
+  const NodeRange own = survey_submaps(r.submaps, survey_index);
+  const std::span<const Submap> submaps(r.submaps.submaps.data() + own.begin, static_cast<std::size_t>(own.size()));
   const LocalOrigin& origin = r.submaps.origin;
   // Correction of each submap: optimized pose relative to its DR pose, in the map frame.
   std::vector<Eigen::Isometry3d> corrections;
-  for (std::size_t i = first; i < last; ++i) corrections.push_back(r.optimized_poses[i] * r.dr_poses[i].inverse());
+  for (int i = own.begin; i < own.end; ++i) corrections.push_back(r.optimized_poses[i] * r.dr_poses[i].inverse());
   auto correction_at = [&](double t) -> Eigen::Isometry3d {
     if (submaps.empty()) return Eigen::Isometry3d::Identity();
     if (t <= submaps.front().time_mid) return corrections.front();

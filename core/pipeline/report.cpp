@@ -250,7 +250,7 @@ nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
 // Several surveys in one graph: each survey's submaps, its trajectory error (when every submap
 // has a reference) and the registrations between it and the others.
 struct SurveyPart {
-  int first = 0, count = 0;
+  NodeRange submaps;
   std::optional<ErrorStats> trajectory, trajectory_dr;
   int cross_accepted = 0, cross_registered = 0;  // registrations with another survey's submap
 };
@@ -263,11 +263,10 @@ std::vector<SurveyPart> survey_parts(const PipelineResult& r) {
   const bool every_reference = static_cast<int>(r.trajectory_errors.size()) == n;
   for (std::size_t k = 0; k <= starts.size(); ++k) {
     SurveyPart part;
-    part.first = k == 0 ? 0 : starts[k - 1];
-    part.count = (k < starts.size() ? starts[k] : n) - part.first;
+    part.submaps = survey_nodes(starts, static_cast<int>(k), n);
     if (every_reference) {
       const auto slice = [&](const std::vector<double>& e) {
-        return error_stats(std::vector<double>(e.begin() + part.first, e.begin() + part.first + part.count));
+        return error_stats(std::vector<double>(e.begin() + part.submaps.begin, e.begin() + part.submaps.end));
       };
       part.trajectory = slice(r.trajectory_errors);
       part.trajectory_dr = slice(r.dr_trajectory_errors);
@@ -276,12 +275,9 @@ std::vector<SurveyPart> survey_parts(const PipelineResult& r) {
   }
   for (const Constraint& c : r.constraints) {
     if (from_navigation(c.type) || r.config.graph.same_survey(c.from, c.to)) continue;
-    for (SurveyPart& part : parts) {
-      const bool touches = (c.from >= part.first && c.from < part.first + part.count) ||
-                           (c.to >= part.first && c.to < part.first + part.count);
-      if (!touches) continue;
-      ++part.cross_registered;
-      part.cross_accepted += c.in_graph() ? 1 : 0;
+    for (int survey : {survey_of(starts, c.from), survey_of(starts, c.to)}) {
+      ++parts[survey].cross_registered;
+      parts[survey].cross_accepted += c.in_graph() ? 1 : 0;
     }
   }
   return parts;
@@ -291,7 +287,7 @@ nlohmann::json site_json(const PipelineResult& r) {
   if (!r.site_consistency) return nullptr;
   nlohmann::json surveys = nlohmann::json::array();
   for (const SurveyPart& part : survey_parts(r)) {
-    nlohmann::json j = {{"first_submap", part.first}, {"submaps", part.count},
+    nlohmann::json j = {{"first_submap", part.submaps.begin}, {"submaps", part.submaps.size()},
                         {"registrations_with_other_surveys", {{"accepted", part.cross_accepted}, {"tried", part.cross_registered}}}};
     if (part.trajectory) {
       j["trajectory_error_m"] = {{"optimized", stats_json(*part.trajectory)}, {"dead_reckoning", stats_json(*part.trajectory_dr)}};
@@ -368,8 +364,8 @@ std::string report_text(const PipelineResult& r) {
                       t.rmse, t.mean, t.std, t.max, t0.rmse, ta.rmse, ta.max, ta0.rmse);
   }
   for (const SurveyPart& part : survey_parts(r)) {
-    summary += format("  survey at submap %d: %d submaps, %d/%d registrations with other surveys accepted", part.first,
-                      part.count, part.cross_accepted, part.cross_registered);
+    summary += format("  survey at submap %d: %d submaps, %d/%d registrations with other surveys accepted",
+                      part.submaps.begin, part.submaps.size(), part.cross_accepted, part.cross_registered);
     if (part.trajectory) {
       summary += format(", trajectory rmse %.2f m (dead reckoning %.2f m)", part.trajectory->rmse, part.trajectory_dr->rmse);
     }

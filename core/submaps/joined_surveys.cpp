@@ -30,9 +30,10 @@ SubmapSet join_surveys(std::vector<SubmapSet> surveys) {
   return joined;
 }
 
-int survey_of_submap(const SubmapSet& set, int index) {
-  return static_cast<int>(std::upper_bound(set.survey_starts.begin(), set.survey_starts.end(), index) -
-                          set.survey_starts.begin());
+int survey_of_submap(const SubmapSet& set, int index) { return survey_of(set.survey_starts, index); }
+
+NodeRange survey_submaps(const SubmapSet& set, int survey) {
+  return survey_nodes(set.survey_starts, survey, static_cast<int>(set.submaps.size()));
 }
 
 }  // namespace bathyslam

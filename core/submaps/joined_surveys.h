@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/submaps/submap.h"
+#include "core/types/survey_starts.h"
 
 namespace bathyslam {
 
@@ -17,5 +18,8 @@ SubmapSet join_surveys(std::vector<SubmapSet> surveys);
 
 // The survey (0-based, in join order) that submap `index` belongs to.
 int survey_of_submap(const SubmapSet& set, int index);
+
+// The submaps [begin, end) of survey `survey` (0-based, in join order).
+NodeRange survey_submaps(const SubmapSet& set, int survey);
 
 }  // namespace bathyslam

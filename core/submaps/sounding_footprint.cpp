@@ -5,16 +5,11 @@
 #include <optional>
 
 #include "core/sync/nav_interpolation.h"
+#include "core/types/median.h"
 
 namespace bathyslam {
 
 namespace {
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
 
 // The distance sailed while pinging: the median step between consecutive pings times the number
 // of steps, leaving out pauses (steps of more than 10 median ping intervals). Medians, so that a

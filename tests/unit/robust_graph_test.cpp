@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <algorithm>
 #include <numeric>
 #include <random>
@@ -62,32 +63,37 @@ Information6 registration_information() { return information_from_sigmas({0.3, 0
 
 // ---- DR noise -------------------------------------------------------------------------------
 
-// The first-order covariance against the spread of DR re-run with sampled step noise, both ways
-// along the chain and across the turn: whitened by the model, the sample covariance is ≈ I.
-TEST(DrNoise, CovarianceMatchesMonteCarloOfNoisyChains) {
-  const std::vector<Eigen::Isometry3d> dr = out_and_back(15);
-  const GraphConfig config;
-  const DrNoiseModel model(dr, config);
-  const std::vector<std::pair<int, int>> pairs = {{0, 12}, {3, 25}, {25, 3}, {29, 14}, {7, 8}};
+// Whitened by the model, the sample covariance of each pair's relative pose over 20,000 chains
+// drawn by `sample` (DR re-run with sampled noise) is ≈ I.
+void expect_monte_carlo_matches(const DrNoiseModel& model, const std::vector<std::pair<int, int>>& pairs,
+                                const std::function<std::vector<Eigen::Isometry3d>()>& sample) {
   std::vector<std::vector<Vector6>> errors(pairs.size());
-  std::mt19937 rng(11);
-  for (int sample = 0; sample < 20000; ++sample) {
-    const std::vector<Eigen::Isometry3d> chain = noisy_chain(dr, config, rng);
+  for (int n = 0; n < 20000; ++n) {
+    const std::vector<Eigen::Isometry3d> chain = sample();
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       const auto [from, to] = pairs[k];
       errors[k].push_back(pose_difference(chain[from].inverse() * chain[to], model.relative_pose(from, to)));
     }
   }
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    Covariance6 sample = Covariance6::Zero();
-    for (const Vector6& e : errors[k]) sample += e * e.transpose() / errors[k].size();
-    const Covariance6 predicted = model.covariance(pairs[k].first, pairs[k].second);
-    const Eigen::LLT<Covariance6> llt(predicted);
+    Covariance6 covariance = Covariance6::Zero();
+    for (const Vector6& e : errors[k]) covariance += e * e.transpose() / errors[k].size();
+    const Eigen::LLT<Covariance6> llt(model.covariance(pairs[k].first, pairs[k].second));
     const Covariance6 inverse_root = llt.matrixL().solve(Covariance6::Identity());
-    const Eigen::SelfAdjointEigenSolver<Covariance6> whitened(inverse_root * sample * inverse_root.transpose());
+    const Eigen::SelfAdjointEigenSolver<Covariance6> whitened(inverse_root * covariance * inverse_root.transpose());
     EXPECT_GT(whitened.eigenvalues().minCoeff(), 0.93) << pairs[k].first << "->" << pairs[k].second;
     EXPECT_LT(whitened.eigenvalues().maxCoeff(), 1.07) << pairs[k].first << "->" << pairs[k].second;
   }
+}
+
+// The first-order covariance against the spread of DR re-run with sampled step noise, both ways
+// along the chain and across the turn.
+TEST(DrNoise, CovarianceMatchesMonteCarloOfNoisyChains) {
+  const std::vector<Eigen::Isometry3d> dr = out_and_back(15);
+  const GraphConfig config;
+  std::mt19937 rng(11);
+  expect_monte_carlo_matches(DrNoiseModel(dr, config), {{0, 12}, {3, 25}, {25, 3}, {29, 14}, {7, 8}},
+                             [&] { return noisy_chain(dr, config, rng); });
 }
 
 // Two surveys of one site: the second's chain hangs off node 0 by its datum edge (both start
@@ -101,32 +107,18 @@ TEST(DrNoise, SecondSurveyHangsOffTheDatumByItsStartFixes) {
   config.dr_sigma_rotation_rad = {1e-4, 1e-4, 5e-3};
   config.survey_starts = {16};
   const DrNoiseModel model(dr, config);
-  const std::vector<std::pair<int, int>> pairs = {{3, 20}, {20, 3}, {15, 25}, {17, 24}, {0, 16}};
-  std::vector<std::vector<Vector6>> errors(pairs.size());
+  const std::vector<Eigen::Isometry3d> first(dr.begin(), dr.begin() + 16), second(dr.begin() + 16, dr.end());
   std::mt19937 rng(5);
   std::normal_distribution<double> unit(0.0, 1.0);
-  for (int sample = 0; sample < 20000; ++sample) {
-    std::vector<Eigen::Isometry3d> first(dr.begin(), dr.begin() + 16), second(dr.begin() + 16, dr.end());
+  expect_monte_carlo_matches(model, {{3, 20}, {20, 3}, {15, 25}, {17, 24}, {0, 16}}, [&] {
     std::vector<Eigen::Isometry3d> chain = noisy_chain(first, config, rng);
     Vector6 fix;
     for (int k = 0; k < 3; ++k) fix(k) = std::sqrt(2.0) * config.start_sigma_translation_m(k) * unit(rng);
     for (int k = 0; k < 3; ++k) fix(3 + k) = std::sqrt(2.0) * config.start_sigma_rotation_rad(k) * unit(rng);
     const Eigen::Isometry3d start = chain[0] * perturbed(dr[0].inverse() * dr[16], fix);
     for (const Eigen::Isometry3d& p : noisy_chain(second, config, rng)) chain.push_back(start * second[0].inverse() * p);
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-      const auto [from, to] = pairs[k];
-      errors[k].push_back(pose_difference(chain[from].inverse() * chain[to], model.relative_pose(from, to)));
-    }
-  }
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    Covariance6 sample = Covariance6::Zero();
-    for (const Vector6& e : errors[k]) sample += e * e.transpose() / errors[k].size();
-    const Eigen::LLT<Covariance6> llt(model.covariance(pairs[k].first, pairs[k].second));
-    const Covariance6 inverse_root = llt.matrixL().solve(Covariance6::Identity());
-    const Eigen::SelfAdjointEigenSolver<Covariance6> whitened(inverse_root * sample * inverse_root.transpose());
-    EXPECT_GT(whitened.eigenvalues().minCoeff(), 0.93) << pairs[k].first << "->" << pairs[k].second;
-    EXPECT_LT(whitened.eigenvalues().maxCoeff(), 1.07) << pairs[k].first << "->" << pairs[k].second;
-  }
+    return chain;
+  });
   // Within the second survey, as a chain of its own: no trace of the first survey's drift.
   const DrNoiseModel alone(std::vector<Eigen::Isometry3d>(dr.begin() + 16, dr.end()), GraphConfig{config.dr_sigma_translation_m,
                                                                                                    config.dr_sigma_rotation_rad});
