@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <unordered_map>
 
 #include <opencv2/imgproc.hpp>
@@ -114,12 +115,42 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
                            [&](int a, int b) { return on_adjacent_lines(set, a, b, config); });
 }
 
+namespace {
+
+// Keeps, of the pairs across two surveys, those each later submap overlaps most: at most
+// `per_survey` with each earlier survey and `in_all` with all of them. Pairs within a survey all
+// stay. `pairs` come grouped by their later submap.
+std::vector<CandidatePair> best_across_surveys(const SubmapSet& set, std::vector<CandidatePair> pairs, int per_survey,
+                                               int in_all) {
+  if (set.survey_starts.empty()) return pairs;
+  std::stable_sort(pairs.begin(), pairs.end(), [](const CandidatePair& a, const CandidatePair& b) {
+    return a.source != b.source ? a.source < b.source : a.overlap_fraction > b.overlap_fraction;
+  });
+  std::vector<CandidatePair> kept;
+  std::vector<int> taken(set.survey_starts.size() + 1, 0);  // the later submap's pairs, by survey
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const CandidatePair& p = pairs[k];
+    if (k == 0 || p.source != pairs[k - 1].source) std::fill(taken.begin(), taken.end(), 0);
+    const int survey = survey_of_submap(set, p.target), total = std::accumulate(taken.begin(), taken.end(), 0);
+    if (survey == survey_of_submap(set, p.source)) {
+      kept.push_back(p);
+    } else if (taken[survey] < per_survey && total < in_all) {
+      ++taken[survey];
+      kept.push_back(p);
+    }
+  }
+  return kept;
+}
+
+}  // namespace
+
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                            const CandidateConfig& config, LaterSubmaps later) {
-  return overlapping_pairs(set, poses, config.min_overlap_fraction, later, [&](int a, int b) {
+  auto pairs = overlapping_pairs(set, poses, config.min_overlap_fraction, later, [&](int a, int b) {
     const bool apart = std::abs(a - b) >= config.loop_min_submap_gap || survey_of_submap(set, a) != survey_of_submap(set, b);
     return apart && !on_adjacent_lines(set, a, b, config);
   });
+  return best_across_surveys(set, std::move(pairs), config.max_pairs_per_other_survey, config.max_pairs_across_surveys);
 }
 
 }  // namespace bathyslam

@@ -30,12 +30,22 @@ struct CandidateConfig {
   double min_overlap_fraction = 0.1;
   // Loop candidates: submaps this many apart in time or more (nearer ones are odometry's).
   int loop_min_submap_gap = 5;
+  // Pairs across two surveys of one site: a later submap registers with at most this many of each
+  // earlier survey's submaps, those it overlaps most. Every overlapping pair made a job of N
+  // surveys cost about N² single ones (docs/sites.md). 0: none, each survey registered alone and
+  // placed by its start fix (the surveys "processed apart" to compare with).
+  int max_pairs_per_other_survey = 2;
+  // ... and at most this many across all earlier surveys, those it overlaps most: a job of N
+  // surveys then costs about N single ones, not N².
+  int max_pairs_across_surveys = 4;
   template <typename Field>
   void fields(Field&& field) {
     field("k_adjacent_lines", k_adjacent_lines, 1, 100);
     field("parallel_tolerance_deg", parallel_tolerance_deg, 0, 90);
     field("min_overlap_fraction", min_overlap_fraction, 0, 1);
     field("loop_min_submap_gap", loop_min_submap_gap, 1, 100000);
+    field("max_pairs_per_other_survey", max_pairs_per_other_survey, 0, 100000);
+    field("max_pairs_across_surveys", max_pairs_across_surveys, 0, 100000);
   }
 };
 
@@ -64,7 +74,8 @@ std::vector<CandidatePair> adjacent_line_candidates(const SubmapSet& set,
 
 // Loop-closure candidates: pairs whose footprints (at `poses`) overlap enough but that are not
 // on K-adjacent parallel lines (check lines crossing the lawnmower, revisits, turns), and are
-// far enough apart in time; every overlapping pair of two surveys of one site (join_surveys).
+// far enough apart in time; and pairs of two surveys of one site (join_surveys): for each later
+// submap those it overlaps most, within the caps per earlier survey and in all.
 std::vector<CandidatePair> loop_candidates(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                            const CandidateConfig& config = {}, LaterSubmaps later = {});
 

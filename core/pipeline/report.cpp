@@ -380,10 +380,13 @@ std::string report_text(const PipelineResult& r) {
   }
   if (r.site_consistency) {
     const SiteConsistency &site = *r.site_consistency, &site0 = *r.dr_site_consistency;
-    summary += format("  within surveys   consistency rmse %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n"
-                      "  across surveys   consistency rmse %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n",
-                      site.within.stats.rmse, site.within.stats.p99, site.within.stats.count, site0.within.stats.rmse,
-                      site.across.stats.rmse, site.across.stats.p99, site.across.stats.count, site0.across.stats.rmse);
+    const auto line = [](const char* label, const ErrorStats& now, const ErrorStats& before, const char* none) {
+      if (now.count == 0 && before.count == 0) return format("  %-16s none: %s\n", label, none);
+      return format("  %-16s consistency rmse %.3f m, p99 %.3f m over %zu cells (dead reckoning: rmse %.3f m)\n", label,
+                    now.rmse, now.p99, now.count, before.rmse);
+    };
+    summary += line("within surveys", site.within.stats, site0.within.stats, "no cell seen by two submaps of one survey");
+    summary += line("across surveys", site.across.stats, site0.across.stats, "no cell seen by two surveys");
   }
   if (r.navigation_noise.estimated) {
     const NavigationNoiseEstimate& e = r.navigation_noise;

@@ -4,8 +4,8 @@
 # `process A B` joins them in one graph. Each survey's trajectory must come out better than
 # processed alone, registrations across the surveys must be accepted, the robustness checks must
 # hold (no accepted loop off by more than 2 m or 2 deg where it claims to know, no edge beyond
-# 6 sigma), the difference map must find the dredged area, and surveys in two CRSs are refused
-# naming the file.
+# 6 sigma), the difference map must find the dredged area, a survey that overlaps no other is said
+# so, and surveys in two CRSs are refused naming the file.
 set -euo pipefail
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -49,6 +49,27 @@ PY
 verdict=$(python3 "$rows" lake paper 1 "odometry=$work/joint-odometry/report.json" "mchs=$work/joint/report.json" |
           awk -F'|' '$5 ~ /mchs/ {gsub(/ /, "", $16); print $16}')
 [ "$verdict" = ok ] || { echo "robustness checks of the joint graph: $verdict" >&2; exit 1; }
+
+# A survey elsewhere (its navigation 1.5 km east): the job runs, the report says that survey had no
+# registration with another, and there is no difference to map.
+mkdir "$work/far"
+cp "$work/e2/survey.json" "$work/e2/pings.csv" "$work/far/"
+for nav in nav reference_nav; do
+  awk -F, -v OFS=, 'NR > 1 { $2 = sprintf("%.6f", $2 + 1500) } { print }' "$work/e2/$nav.csv" > "$work/far/$nav.csv"
+done
+"$BATHYSLAM" process "$work/e1" "$work/far" --config mchs --threads 2 --out "$work/apart" > "$work/apart.txt" 2>&1 ||
+  { cat "$work/apart.txt"; exit 1; }
+for said in "no registration with another survey accepted" "across surveys   none: no cell seen by two surveys" \
+            "difference_1_2: the surveys share no cell of the map"; do
+  grep -q "$said" "$work/apart.txt" || { echo "not said: $said" >&2; cat "$work/apart.txt"; exit 1; }
+done
+python3 - "$work/apart" <<'PY'
+import json, os, sys
+out = sys.argv[1]
+surveys = json.load(open(f"{out}/report.json"))["site"]["surveys"]
+assert [s["registrations_with_other_surveys"]["tried"] for s in surveys] == [0, 0], surveys
+assert not os.path.exists(f"{out}/difference_1_2.tif"), "a difference map of surveys that do not overlap"
+PY
 
 # Another CRS: refused, naming the survey.
 sed -i 's/EPSG:32651/EPSG:32650/' "$work/e2/survey.json"

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
 #include <set>
 #include <unordered_set>
 
@@ -106,8 +108,59 @@ TEST(Candidates, PairsAcrossTwoSurveysAreLoopsNeverAdjacentLines) {
   for (const CandidatePair& p : adjacent_line_candidates(set, poses, config)) {
     EXPECT_EQ(survey_of_submap(set, p.target), survey_of_submap(set, p.source)) << p.target << "-" << p.source;
   }
-  const PairSet loops = pair_set(loop_candidates(set, poses, config));
+  CandidateConfig every = config;
+  every.max_pairs_per_other_survey = every.max_pairs_across_surveys = 100000;
+  const std::vector<CandidatePair> all = loop_candidates(set, poses, every);
+  const PairSet loops = pair_set(all);
   for (const auto& pair : across) EXPECT_TRUE(loops.contains(pair)) << pair.first << "-" << pair.second;
+
+  // Capped: each later submap keeps the pairs with the other survey it overlaps most.
+  std::map<int, std::vector<double>> overlaps;  // later submap -> its overlaps with the first survey
+  for (const CandidatePair& p : all) {
+    if (p.target < start && p.source >= start) overlaps[p.source].push_back(p.overlap_fraction);
+  }
+  std::map<int, std::vector<double>> kept;
+  for (const CandidatePair& p : loop_candidates(set, poses, config)) {
+    if (p.target < start && p.source >= start) kept[p.source].push_back(p.overlap_fraction);
+  }
+  ASSERT_EQ(kept.size(), overlaps.size());
+  for (auto& [source, fractions] : overlaps) {
+    std::sort(fractions.rbegin(), fractions.rend());
+    fractions.resize(std::min<std::size_t>(fractions.size(), config.max_pairs_per_other_survey));
+    std::sort(kept[source].rbegin(), kept[source].rend());
+    EXPECT_EQ(kept[source], fractions) << "submap " << source;
+  }
+
+  // Three surveys, at most one pair of a later submap in all.
+  int third = start;
+  while (set.submaps[third].line < middle + 2) ++third;
+  set.survey_starts = {start, third};
+  CandidateConfig three = config;
+  three.max_pairs_across_surveys = 1;
+  std::map<int, std::map<int, int>> by_survey;  // later submap -> earlier survey -> pairs
+  for (const CandidatePair& p : loop_candidates(set, poses, three)) {
+    const int from = survey_of_submap(set, p.target);
+    if (from != survey_of_submap(set, p.source)) ++by_survey[p.source][from];
+  }
+  ASSERT_FALSE(by_survey.empty());
+  for (const auto& [source, pairs] : by_survey) {
+    int total = 0;
+    for (const auto& [survey, count] : pairs) {
+      EXPECT_LE(count, three.max_pairs_per_other_survey) << "submap " << source << ", survey " << survey;
+      total += count;
+    }
+    EXPECT_LE(total, three.max_pairs_across_surveys) << "submap " << source;
+  }
+  set.survey_starts = {start};
+
+  // None: each survey alone, the pairs within the surveys all kept.
+  CandidateConfig apart = config;
+  apart.max_pairs_per_other_survey = 0;
+  const std::vector<CandidatePair> alone = loop_candidates(set, poses, apart);
+  for (const CandidatePair& p : alone) EXPECT_EQ(survey_of_submap(set, p.target), survey_of_submap(set, p.source));
+  EXPECT_EQ(alone.size(), all.size() - std::count_if(all.begin(), all.end(), [&](const CandidatePair& p) {
+                                         return p.target < start && p.source >= start;
+                                       }));
 }
 
 TEST(Candidates, FindEveryTrulyOverlappingAdjacentLinePairAndNoOther) {

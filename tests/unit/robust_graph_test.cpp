@@ -432,6 +432,44 @@ TEST(MaximumClique, BranchAndBoundMatchesExhaustiveSearch) {
   }
 }
 
+// The greedy search as maximum_clique documents it, written plainly: from each vertex, repeatedly
+// add the candidate of highest degree (the first such) adjacent to every member so far; the
+// largest found, the first of equal size.
+std::vector<int> plain_greedy_clique(const Adjacency& adjacency) {
+  const int n = static_cast<int>(adjacency.size());
+  std::vector<int> degree(n, 0), best;
+  for (int v = 0; v < n; ++v) degree[v] = static_cast<int>(std::count(adjacency[v].begin(), adjacency[v].end(), 1));
+  for (int seed = 0; seed < n; ++seed) {
+    std::vector<int> clique = {seed}, fitting;  // fitting: adjacent to every member
+    for (int v = 0; v < n; ++v) {
+      if (adjacency[seed][v]) fitting.push_back(v);
+    }
+    while (!fitting.empty()) {
+      int next = fitting[0];
+      for (int v : fitting) next = degree[v] > degree[next] ? v : next;
+      clique.push_back(next);
+      std::erase_if(fitting, [&](int v) { return !adjacency[next][v]; });
+    }
+    if (clique.size() > best.size()) best = clique;
+  }
+  std::sort(best.begin(), best.end());
+  return best;
+}
+
+TEST(MaximumClique, TheGreedySearchOnManyLoopsIsTheDocumentedOne) {
+  std::mt19937 rng(11);
+  for (const double density : {0.3, 0.9, 0.99}) {
+    std::bernoulli_distribution edge(density);
+    const int n = 300;  // several words of bits, above the exact search's default size
+    Adjacency adjacency(n, std::vector<char>(n, 0));
+    for (int a = 0; a < n; ++a) {
+      for (int b = a + 1; b < n; ++b) adjacency[a][b] = adjacency[b][a] = edge(rng);
+    }
+    const Clique greedy = maximum_clique(adjacency, 0);
+    EXPECT_EQ(greedy.members, plain_greedy_clique(adjacency)) << "density " << density;
+  }
+}
+
 TEST(LoopConsistency, ReversingALoopKeepsItsPairDistances) {
   const Survey s = lawnmower(1);
   std::mt19937 rng(2);
