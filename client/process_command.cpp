@@ -119,7 +119,8 @@ void run_process(const ProcessOptions& o) {
     }
     std::fprintf(stderr, "\r  %-10s %5.1f %%", std::string(stage).c_str(), 100.0 * fraction);
   };
-  const PipelineResult result = run_pipeline(std::move(input.submaps), input.read_seconds, config, progress);
+  PipelineResult result = run_pipeline(std::move(input.submaps), input.read_seconds, config, progress);
+  discount_change_across_surveys(result, fuse, o.difference);
   std::fprintf(stderr, "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

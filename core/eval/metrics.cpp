@@ -113,8 +113,22 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
   return report_of(std::move(errors), config);
 }
 
+namespace {
+
+// The centre (map frame) of the cell of a cell_line_key shifted right by 20 (its two 20-bit indices).
+Eigen::Vector2d cell_centre(uint64_t cell, double cell_m) {
+  const auto index = [](uint64_t bits) {  // sign-extended from 20 bits
+    const auto v = static_cast<int64_t>(bits & 0xFFFFF);
+    return v >= (int64_t{1} << 19) ? v - (int64_t{1} << 20) : v;
+  };
+  return {(static_cast<double>(index(cell >> 20)) + 0.5) * cell_m, (static_cast<double>(index(cell)) + 0.5) * cell_m};
+}
+
+}  // namespace
+
 SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                 const ConsistencyConfig& config) {
+                                 const ConsistencyConfig& config,
+                                 const std::function<bool(const Eigen::Vector2d&)>& changed) {
   std::vector<int> survey_of_line(set.lines.size(), 0);
   for (const Submap& s : set.submaps) {
     if (s.line >= 0) {
@@ -130,9 +144,10 @@ SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::
   }
   std::vector<double> within, across;
   for (const auto& [cell, spreads] : per_cell) {
+    const bool left_out = changed && changed(cell_centre(cell, config.cell_m));
     for (std::size_t a = 0; a < surveys; ++a) {
       if (spreads[a].lines >= 2) within.push_back(spreads[a].hi - spreads[a].lo);
-      for (std::size_t b = a + 1; b < surveys; ++b) {
+      for (std::size_t b = a + 1; b < surveys && !left_out; ++b) {
         if (spreads[a].lines == 0 || spreads[b].lines == 0) continue;
         across.push_back(std::max(spreads[a].hi - spreads[b].lo, spreads[b].hi - spreads[a].lo));
       }

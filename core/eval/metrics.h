@@ -1,5 +1,6 @@
 #pragma once
 // eval: the quality report's numbers (docs/design.md, "Evaluation").
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -60,8 +61,11 @@ ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eige
 struct SiteConsistency {
   ConsistencyReport within, across;
 };
+// `changed` (map frame x, y): cells where the seabed changed between the surveys, left out of
+// `across` (a change is not a disagreement of the registration).
 SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                 const ConsistencyConfig& config = {});
+                                 const ConsistencyConfig& config = {},
+                                 const std::function<bool(const Eigen::Vector2d&)>& changed = {});
 
 // Horizontal distance of each submap pose from its reference pose (the first pose is shared).
 std::vector<double> trajectory_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses);

@@ -8,6 +8,9 @@
 #include <malloc.h>
 #endif
 
+#include <opencv2/imgproc.hpp>
+
+#include "core/fuse/difference.h"
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/register_pairs.h"
 #include "core/pipeline/robust_backend.h"
@@ -293,7 +296,93 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
   return r;
 }
 
+// The change of `map` where it is significant, 0 where it is not, NaN off the map.
+double significant_change(const DifferenceMap& map, std::int64_t col, std::int64_t row) {
+  if (!map.geometry.contains(col, row)) return NAN;
+  const std::size_t i = map.geometry.index(col, row);
+  return map.significant[i] == 1.0f ? map.change[i] : std::isnan(map.change[i]) ? NAN : 0.0;
+}
+
+// What the significant change since the first survey shifts the overlap of a registration's two
+// submaps by (at the solution): its mean over the overlap's cells, the share of the change a
+// least-squares registration takes for a misfit. NaN when the overlap has no cell of both.
+double change_over_overlap(const PipelineResult& r, const Constraint& c, const DifferenceMap& later,
+                           const DifferenceMap* earlier) {
+  std::vector<cv::Point2f> polygons[2], overlap;
+  for (int side = 0; side < 2; ++side) {
+    const int node = side == 0 ? c.from : c.to;
+    for (const auto& q : footprint_of(r.submaps.submaps[node], r.optimized_poses[node]).corners) {
+      polygons[side].emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+    }
+    if (cv::contourArea(polygons[side], true) < 0) std::reverse(polygons[side].begin(), polygons[side].end());
+  }
+  if (cv::intersectConvexConvex(polygons[0], polygons[1], overlap, true) <= 0) return NAN;
+  const cv::Rect box = cv::boundingRect(overlap);
+  const double res = later.geometry.resolution_m, e0 = r.submaps.origin.easting, n0 = r.submaps.origin.northing;
+  double sum = 0;
+  int cells = 0;
+  for (auto col = static_cast<std::int64_t>(std::floor((e0 + box.x) / res)); col <= std::floor((e0 + box.br().x) / res); ++col) {
+    for (auto row = static_cast<std::int64_t>(std::floor((n0 + box.y) / res)); row <= std::floor((n0 + box.br().y) / res); ++row) {
+      const cv::Point2f centre(static_cast<float>((col + 0.5) * res - e0), static_cast<float>((row + 0.5) * res - n0));
+      if (cv::pointPolygonTest(overlap, centre, false) < 0) continue;
+      const double change = significant_change(later, col, row) - (earlier ? significant_change(*earlier, col, row) : 0.0);
+      if (std::isnan(change)) continue;
+      sum += change;
+      ++cells;
+    }
+  }
+  return cells > 0 ? sum / cells : NAN;
+}
+
 }  // namespace
+
+int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, const DifferenceConfig& difference) {
+  const std::vector<int>& starts = r.submaps.survey_starts;
+  if (starts.empty() || r.safety_net.fell_back) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  const GridRaster first = fuse_survey(r.submaps, r.optimized_poses, 0, fuse);
+  std::vector<DifferenceMap> since_first(starts.size() + 1);
+  for (std::size_t k = 1; k < since_first.size(); ++k) {
+    since_first[k] = difference_map(first, fuse_survey(r.submaps, r.optimized_poses, static_cast<int>(k), fuse), difference);
+  }
+  int doubted = 0;
+  for (Constraint& c : r.constraints) {
+    if (!c.in_graph() || from_navigation(c.type)) continue;
+    int a = survey_of(starts, c.from), b = survey_of(starts, c.to);
+    if (a == b) continue;
+    if (a > b) std::swap(a, b);
+    const double sigma = std::max(since_first[b].sigma_vertical_m, a > 0 ? since_first[a].sigma_vertical_m : 0.0);
+    const double shift = change_over_overlap(r, c, since_first[b], a > 0 ? &since_first[a] : nullptr);
+    if (std::isnan(shift) || std::abs(shift) <= sigma) continue;
+    for (int k : {2, 3, 4}) c.information.row(k).setZero(), c.information.col(k).setZero();
+    ++doubted;
+  }
+  r.registrations_over_change = doubted;
+  if (doubted > 0) {
+    const std::vector<std::string> dropped = r.safety_net.dropped;
+    solve_with_safety_net(r, r.config);
+    r.safety_net.dropped.insert(r.safety_net.dropped.begin(), dropped.begin(), dropped.end());
+    r.optimized_poses = r.graph.poses;
+    evaluate(r, plan_of(r.config));
+  }
+  // Consistency across the surveys where the seabed did not change.
+  const auto changed = [&](const Eigen::Vector2d& p) {
+    const double easting = r.submaps.origin.easting + p.x(), northing = r.submaps.origin.northing + p.y();
+    return std::any_of(since_first.begin() + 1, since_first.end(), [&](const DifferenceMap& map) {
+      const GridGeometry& g = map.geometry;
+      const auto col = static_cast<std::int64_t>(std::floor(easting / g.resolution_m));
+      const auto row = static_cast<std::int64_t>(std::floor(northing / g.resolution_m));
+      return g.contains(col, row) && map.significant[g.index(col, row)] == 1.0f;
+    });
+  };
+  if (!r.safety_net.fell_back) {
+    r.site_consistency = site_consistency(r.submaps, r.optimized_poses, r.config.consistency, changed);
+    r.dr_site_consistency = site_consistency(r.submaps, r.dr_poses, r.config.consistency, changed);
+    r.across_where_unchanged = true;
+  }
+  r.timings.push_back({"change", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+  return doubted;
+}
 
 PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, const ProgressFn& progress,
                             const std::atomic<bool>* cancel) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/eval/metrics.h"
+#include "core/fuse/difference.h"
 #include "core/graph/graph_check.h"
 #include "core/graph/navigation_noise.h"
 #include "core/graph/pose_graph.h"
@@ -54,6 +55,10 @@ struct PipelineResult {
   ConsistencyReport dr_consistency, consistency;
   // Several surveys of one site: consistency within the surveys and across them.
   std::optional<SiteConsistency> dr_site_consistency, site_consistency;
+  // Of those, registrations across surveys left without depth, roll and pitch because their
+  // overlap holds change (discount_change_across_surveys).
+  int registrations_over_change = 0;
+  bool across_where_unchanged = false;  // site_consistency.across left out the changed cells
   std::vector<StageTiming> timings;
   // Within the register stage: the graph solves between its batches (how a growing survey's
   // graph costs, in the report's "graph" section).
@@ -72,5 +77,15 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config,
 // docs/performance.md); `submaps_seconds`, the time that took, is the "submaps" stage's.
 PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
                             const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
+
+// Several surveys: a registration across two surveys whose overlap, at the solution, holds enough
+// significant change (its mean over the overlap beyond the registration's vertical sigma) keeps
+// its horizontal information only, and the graph is solved again, so that the change is not taken
+// for the registration's misfit and shared out between the surveys (on `lake` a dredged cut
+// pulled the first survey 0.12 m deeper around it and the difference lost two thirds of its
+// volume: docs/sites.md). One round: the maps of the solution say where the change is. The
+// consistency across the surveys is then counted where the seabed did not change. Returns how
+// many registrations.
+int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, const DifferenceConfig& difference);
 
 }  // namespace bathyslam

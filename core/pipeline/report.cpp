@@ -296,6 +296,8 @@ nlohmann::json site_json(const PipelineResult& r) {
   }
   const SiteConsistency &c = *r.site_consistency, &c0 = *r.dr_site_consistency;
   return {{"surveys", surveys},
+          {"registrations_over_change", r.registrations_over_change},
+          {"across_where_unchanged", r.across_where_unchanged},
           {"consistency_error_m",
            {{"within_surveys", {{"optimized", stats_json(c.within.stats)}, {"dead_reckoning", stats_json(c0.within.stats)}}},
             {"across_surveys", {{"optimized", stats_json(c.across.stats)}, {"dead_reckoning", stats_json(c0.across.stats)}}}}}};
@@ -372,6 +374,10 @@ std::string report_text(const PipelineResult& r) {
     if (part.cross_accepted == 0) summary += ": no registration with another survey accepted, it stays where its navigation and start fix put it";
     summary += "\n";
   }
+  if (r.registrations_over_change > 0) {
+    summary += format("  %d registrations across surveys overlap a change of the seabed: their depth, roll and pitch left "
+                      "out, the graph solved again\n", r.registrations_over_change);
+  }
   if (const auto why = consistency_not_computed(r)) {
     summary += "consistency error  not computed: " + *why + "\n";
   } else {
@@ -387,6 +393,7 @@ std::string report_text(const PipelineResult& r) {
     };
     summary += line("within surveys", site.within.stats, site0.within.stats, "no cell seen by two submaps of one survey");
     summary += line("across surveys", site.across.stats, site0.across.stats, "no cell seen by two surveys");
+    if (r.across_where_unchanged) summary += "                   (across: cells where the seabed changed left out)\n";
   }
   if (r.navigation_noise.estimated) {
     const NavigationNoiseEstimate& e = r.navigation_noise;

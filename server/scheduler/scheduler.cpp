@@ -285,7 +285,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     // Progress: every stage change, and within a stage at most every `progress_every`.
     std::string last_stage;
     auto last_event = Clock::now();
-    const PipelineResult result = run_pipeline(
+    PipelineResult result = run_pipeline(
         std::move(input.submaps), input.read_seconds, config,
         [&](std::string_view stage, double fraction) {
           if (stage == "done") return;  // the job is done once its results are stored
@@ -295,6 +295,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
           event(std::string(stage), fraction);
         },
         &cancel);
+    discount_change_across_surveys(result, input.fuse, DifferenceConfig{});
 
     event("map", 0, "fusing and tiling");
     const MapProducts map = make_map_products(result, survey.metadata, input.fuse, options_.scratch);

@@ -57,6 +57,29 @@ TEST(Consistency, CorrectedPosesRemoveTheOffset) {
   EXPECT_NEAR(consistency_error(set, poses).stats.rmse, 0.0, 1e-5);
 }
 
+// Two surveys of one line each over the same patches (the second half a metre deeper, and 1 m
+// deeper still where x < 15, a change): across counts every shared cell, or only those not
+// changed; within has none (one line per survey).
+TEST(SiteConsistency, ChangedCellsCanBeLeftOutOfAcross) {
+  SubmapSet set = two_lines_half_a_metre_apart();
+  set.survey_starts = {1};
+  for (Submap& s : set.submaps) s.dr_pose.translation() += Eigen::Vector3d(-40, -40, 0);  // negative cells
+  for (Eigen::Vector3f& p : set.submaps[1].points) {
+    if (p.x() + 10 < 15) p.z() -= 1.0f;  // map x = 10 - 40 + submap x
+  }
+  const std::vector<Eigen::Isometry3d> poses = poses_of(set);
+  const SiteConsistency all = site_consistency(set, poses);
+  EXPECT_EQ(all.within.stats.count, 0u);
+  EXPECT_EQ(all.across.stats.count, 200u);
+  EXPECT_NEAR(all.across.stats.max, 1.5, 1e-5);
+  // The changed cells' centres: x in (-30, -25), y in (-40, -20).
+  const SiteConsistency unchanged = site_consistency(set, poses, {}, [](const Eigen::Vector2d& centre) {
+    return centre.x() > -30 && centre.x() < -25 && centre.y() > -40 && centre.y() < -20;
+  });
+  EXPECT_EQ(unchanged.across.stats.count, 100u);
+  EXPECT_NEAR(unchanged.across.stats.rmse, 0.5, 1e-5);
+}
+
 TEST(ErrorStats, KnownSeries) {
   const ErrorStats s = error_stats({3, 4, 0, 0});  // unordered on purpose
   EXPECT_DOUBLE_EQ(s.mean, 1.75);
