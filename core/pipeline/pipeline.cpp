@@ -14,6 +14,7 @@
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/register_pairs.h"
 #include "core/pipeline/robust_backend.h"
+#include "core/types/format.h"
 #include "core/types/survey_starts.h"
 
 namespace bathyslam {
@@ -359,11 +360,22 @@ int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, co
   }
   r.registrations_over_change = doubted;
   if (doubted > 0) {
-    const std::vector<std::string> dropped = r.safety_net.dropped;
-    solve_with_safety_net(r, r.config);
-    r.safety_net.dropped.insert(r.safety_net.dropped.begin(), dropped.begin(), dropped.end());
+    // Solved as run() solves: with the safety net only where the configuration has it. Its drops
+    // of the first solve stay out of the graph; the verdict counts both solves' drops.
+    const Plan plan = plan_of(r.config);
+    if (plan.safety_net) {
+      const std::vector<std::string> dropped = r.safety_net.dropped;
+      solve_with_safety_net(r, r.config);
+      r.safety_net.dropped.insert(r.safety_net.dropped.begin(), dropped.begin(), dropped.end());
+      if (r.safety_net.pass && !r.safety_net.dropped.empty()) {
+        r.safety_net.verdict =
+            format("pass after dropping %.0f registrations", static_cast<double>(r.safety_net.dropped.size()));
+      }
+    } else {
+      r.graph = solve(r.dr_poses, r.constraints, r.navigation_noise.graph);
+    }
     r.optimized_poses = r.graph.poses;
-    evaluate(r, plan_of(r.config));
+    evaluate(r, plan);
   }
   // Consistency across the surveys where the seabed did not change.
   const auto changed = [&](const Eigen::Vector2d& p) {

@@ -295,7 +295,9 @@ void Scheduler::run(const storage::ClaimedJob& job) {
           event(std::string(stage), fraction);
         },
         &cancel);
+    if (!job.more_survey_ids.empty()) event("change", 0, "registrations across surveys over a change of the seabed");
     discount_change_across_surveys(result, input.fuse, DifferenceConfig{});
+    throw_if_cancelled(&cancel);
 
     event("map", 0, "fusing and tiling");
     const MapProducts map = make_map_products(result, survey.metadata, input.fuse, options_.scratch);
