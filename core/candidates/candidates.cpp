@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <unordered_map>
 
 #include <opencv2/imgproc.hpp>
@@ -128,14 +127,19 @@ std::vector<CandidatePair> best_across_surveys(const SubmapSet& set, std::vector
   });
   std::vector<CandidatePair> kept;
   std::vector<int> taken(set.survey_starts.size() + 1, 0);  // the later submap's pairs, by survey
+  int taken_in_all = 0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const CandidatePair& p = pairs[k];
-    if (k == 0 || p.source != pairs[k - 1].source) std::fill(taken.begin(), taken.end(), 0);
-    const int survey = survey_of_submap(set, p.target), total = std::accumulate(taken.begin(), taken.end(), 0);
+    if (k == 0 || p.source != pairs[k - 1].source) {
+      std::fill(taken.begin(), taken.end(), 0);
+      taken_in_all = 0;
+    }
+    const int survey = survey_of_submap(set, p.target);
     if (survey == survey_of_submap(set, p.source)) {
       kept.push_back(p);
-    } else if (taken[survey] < per_survey && total < in_all) {
+    } else if (taken[survey] < per_survey && taken_in_all < in_all) {
       ++taken[survey];
+      ++taken_in_all;
       kept.push_back(p);
     }
   }
