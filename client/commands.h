@@ -12,5 +12,6 @@ void add_process_command(CLI::App& app);
 void add_upload_command(CLI::App& app);
 void add_job_commands(CLI::App& app);  // submit, watch, jobs, report
 void add_map_commands(CLI::App& app);  // tiles, map
+void add_site_commands(CLI::App& app);  // site create, add, remove, list, show, delete
 
 }  // namespace bathyslam::cli

@@ -33,15 +33,20 @@ struct SubmitOptions {
   Remote remote;
   std::int64_t survey = 0;
   std::vector<std::int64_t> surveys;  // --surveys: several of one site, the first the datum
+  std::int64_t site = 0;              // --site: every survey of a site
+  std::int64_t reference = 0;         // --reference: the datum, when not the first
   std::string config = "mchs";
   std::vector<std::string> sets;
 };
 
 void run_submit(const SubmitOptions& o) {
   v1::SubmitJobRequest request;
-  if ((o.survey != 0) == !o.surveys.empty()) throw std::invalid_argument("submit: give one survey id, or --surveys A,B,...");
-  request.set_survey_id(o.survey != 0 ? o.survey : o.surveys.front());
+  if ((o.survey != 0) + !o.surveys.empty() + (o.site != 0) != 1)
+    throw std::invalid_argument("submit: give one survey id, --surveys A,B,... or --site ID");
+  if (o.site != 0) request.set_site_id(o.site);
+  else request.set_survey_id(o.survey != 0 ? o.survey : o.surveys.front());
   for (std::size_t k = 1; k < o.surveys.size(); ++k) request.add_more_survey_ids(o.surveys[k]);
+  request.set_reference_survey_id(o.reference);
   request.set_configuration(o.config);
   // Parsed as `process` parses them; the server checks names and values (configuration_of).
   for (const auto& [name, value] : overrides_of(o.sets)) (*request.mutable_parameters())[name] = value;
@@ -54,6 +59,7 @@ struct JobOptions {
   Remote remote;
   std::int64_t job = 0;
   std::int64_t survey = 0;
+  std::int64_t site = 0;
   bool json = false;
   std::string out;
 };
@@ -90,6 +96,7 @@ void run_jobs(const JobOptions& o) {
   auto stub = v1::JobService::NewStub(o.remote.channel());
   v1::ListJobsRequest request;
   request.set_survey_id(o.survey);
+  request.set_site_id(o.site);
   std::printf("%6s %6s  %-9s %-10s %-10s %6s  %-19s %8s  %s\n", "job", "survey", "config", "state", "stage", "%",
               "created (UTC)", "run (s)", "error");
   do {
@@ -172,6 +179,9 @@ void add_job_commands(CLI::App& app) {
                   "several surveys of one site in one graph, comma-separated; the first is held (the datum) and the "
                   "report and difference maps compare the others with it")
       ->delimiter(',');
+  cmd->add_option("--site", submit->site, "every survey of a site (bathyslam site), in the site's order");
+  cmd->add_option("--reference", submit->reference,
+                  "several surveys: the one held in place (the datum), when not the first; differences are from it");
   cmd->add_option("--config", submit->config, "odometry, gicp or mchs")->capture_default_str();
   cmd->add_option("--set", submit->sets, "override a parameter: key=value (repeatable)");
   add_remote_options(cmd, submit->remote);
@@ -185,7 +195,8 @@ void add_job_commands(CLI::App& app) {
 
   auto jobs = std::make_shared<JobOptions>();
   cmd = app.add_subcommand("jobs", "List jobs, newest first");
-  cmd->add_option("--survey", jobs->survey, "only the jobs of this survey");
+  cmd->add_option("--survey", jobs->survey, "only the jobs that join this survey");
+  cmd->add_option("--site", jobs->site, "only the jobs submitted for this site");
   add_remote_options(cmd, jobs->remote);
   cmd->callback([jobs] { run_jobs(*jobs); });
 

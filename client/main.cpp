@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   bathyslam::cli::add_inspect_command(app);
   bathyslam::cli::add_process_command(app);
   bathyslam::cli::add_upload_command(app);
+  bathyslam::cli::add_site_commands(app);
   bathyslam::cli::add_job_commands(app);
   bathyslam::cli::add_map_commands(app);
   try {

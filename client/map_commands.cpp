@@ -21,7 +21,8 @@ struct MapOptions {
   std::string out;
   std::string format = "geotiff";
   std::string map_format = "cog";  // `map`: cog, bag, gsf or difference
-  int epoch = 2;                    // `map --format difference`: the later survey
+  int epoch = 0;  // `map --format difference`: the later survey (0: 2); gsf: whose (0: the first's)
+  std::vector<int> epochs;  // `map --format difference --epochs A,B`: from survey A to B
   std::vector<double> bbox;  // min easting, min northing, max easting, max northing
 };
 
@@ -112,7 +113,13 @@ void run_map(const MapOptions& o) {
                      : o.map_format == "gsf"        ? v1::GSF
                      : o.map_format == "difference" ? v1::DIFFERENCE
                                                     : v1::COG);
-  request.set_epoch(o.epoch);
+  request.set_epoch(o.epoch == 0 && o.map_format == "difference" ? 2 : o.epoch);
+  if (!o.epochs.empty()) {
+    if (o.epochs.size() != 2 || o.epoch != 0 || o.map_format != "difference")
+      throw std::invalid_argument("map: --epochs A,B (two surveys, with --format difference, without --epoch)");
+    request.set_from_epoch(o.epochs[0]);
+    request.set_epoch(o.epochs[1]);
+  }
   auto context = o.remote.context();
   auto reader = v1::MapService::NewStub(o.remote.channel())->GetMap(context.get(), request);
   const std::int64_t size = save(reader, "GetMap", o.out);
@@ -137,11 +144,14 @@ void add_map_commands(CLI::App& app) {
   cmd->add_option("--format", map->map_format,
                   "cog (elevation, uncertainty, count), bag (elevation, uncertainty), gsf (the survey's pings "
                   "with the corrected navigation) or difference (a job of several surveys: the change from the first "
-                  "to --epoch)")
+                  "to --epoch, or between --epochs A,B)")
       ->check(CLI::IsMember({"cog", "bag", "gsf", "difference"}))
       ->capture_default_str();
-  cmd->add_option("--epoch", map->epoch, "--format difference: the later survey's place in the job (2 to N)")
-      ->capture_default_str();
+  cmd->add_option("--epoch", map->epoch,
+                  "a job of several surveys: --format difference, the later survey's place in the job (2 to N; "
+                  "default 2); --format gsf, whose corrected GSF (1 to N; default the first's)");
+  cmd->add_option("--epochs", map->epochs, "--format difference: the change from survey A to survey B (A < B)")
+      ->delimiter(',');
   cmd->add_option("--out", map->out, "output file (.tif, .bag or .gsf)")->required();
   add_remote_options(cmd, map->remote);
   cmd->callback([map] { run_map(*map); });

@@ -36,23 +36,33 @@ struct ProcessOptions {
   bool export_gsf = false;
   bool export_soundings = false;
   DifferenceConfig difference;
+  std::string reference;  // several surveys: the one held (the datum), moved to the front
   std::string out;
 };
 
+// A bundle, .all or .xtf files read again: their pings with the corrected navigation as one GSF
+// file (the one the service stores for a job); `survey_index`: the survey's place in a site.
+void export_pings_as_gsf(const SurveyInput& input, const Survey& survey, const PipelineResult& result,
+                         const std::filesystem::path& path, int survey_index = 0) {
+  const std::uint64_t pings = write_corrected_gsf(
+      survey, result, path,
+      [&](PingSink& sink) {
+        BundleReadResult read;
+        read.survey = load_survey(input, sink).survey;
+        return read;
+      },
+      survey_index);
+  std::printf("%s: %llu pings with the corrected navigation\n", path.filename().c_str(),
+              static_cast<unsigned long long>(pings));
+}
+
 // GSF input: each file copied with the corrected navigation in its ping headers
 // (OUT/<name>.corrected.gsf); a bundle, .all or .xtf files: their pings written as OUT/corrected.gsf.
-// The bundle's file is the one the service stores for a job.
 void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineResult& result,
                 const std::vector<NavSample>& corrected) {
   const std::filesystem::path out(o.out);
   if (!gsf::is_gsf_path(o.survey.inputs.front())) {
-    const SurveyInput input = o.survey.input();
-    const std::uint64_t pings = write_corrected_gsf(survey, result, out / kCorrectedGsfFile, [&](PingSink& sink) {
-      BundleReadResult read;
-      read.survey = load_survey(input, sink).survey;
-      return read;
-    });
-    std::printf("%s: %llu pings with the corrected navigation\n", kCorrectedGsfFile, static_cast<unsigned long long>(pings));
+    export_pings_as_gsf(o.survey.input(), survey, result, out / kCorrectedGsfFile);
     return;
   }
   for (const std::filesystem::path input : o.survey.inputs) {
@@ -61,6 +71,17 @@ void export_gsf(const ProcessOptions& o, const Survey& survey, const PipelineRes
     std::printf("%s: %llu of %llu pings with the corrected navigation, all %llu records kept\n", name.c_str(),
                 static_cast<unsigned long long>(n.rewritten), static_cast<unsigned long long>(n.pings),
                 static_cast<unsigned long long>(n.records));
+  }
+}
+
+// Several bundles: each survey's own corrected GSF, corrected.gsf for the first and
+// corrected.<k>.gsf for the k-th, as its trajectory.
+void export_site_gsf(const ProcessOptions& o, const std::vector<Survey>& site, const PipelineResult& result) {
+  for (std::size_t k = 0; k < site.size(); ++k) {
+    SurveyOptions one = o.survey;
+    one.inputs = {o.survey.inputs[k]};
+    export_pings_as_gsf(one.input(), site[k], result, std::filesystem::path(o.out) / corrected_gsf_name(static_cast<int>(k) + 1),
+                        static_cast<int>(k));
   }
 }
 
@@ -75,7 +96,7 @@ JobInput read_site(const ProcessOptions& o, const PipelineConfig& config, std::v
   return read_site_input(reads, o.survey.inputs, config, o.fuse, surveys);
 }
 
-// The change from each later survey of the site from the first: difference_1_<k>.{tif,json}.
+// The change between two surveys of the site: difference_<j>_<k>.{tif,json}.
 void print_difference(const DifferenceProducts& d, double k_sigma) {
   if (d.map.cells_compared == 0) {
     std::printf("%s: the surveys share no cell of the map\n", d.stem.c_str());
@@ -97,6 +118,20 @@ void print_difference(const DifferenceProducts& d, double k_sigma) {
 bool is_site(const ProcessOptions& o) {
   const std::filesystem::path first = o.survey.inputs.front();
   return o.survey.inputs.size() > 1 && (std::filesystem::is_directory(first) || first.extension() == ".tar");
+}
+
+// The surveys with --reference first: the job's datum, and the "1" of every difference.
+ProcessOptions with_reference_first(ProcessOptions o) {
+  if (o.reference.empty()) return o;
+  auto same = [&](const std::string& input) {
+    std::error_code error;
+    return input == o.reference || std::filesystem::equivalent(input, o.reference, error);
+  };
+  auto reference = std::find_if(o.survey.inputs.begin(), o.survey.inputs.end(), same);
+  if (reference == o.survey.inputs.end() || !is_site(o))
+    throw std::invalid_argument("--reference: " + o.reference + " is not one of the surveys (bundles) given");
+  std::rotate(o.survey.inputs.begin(), reference, reference + 1);
+  return o;
 }
 
 void run_process(const ProcessOptions& o) {
@@ -144,15 +179,15 @@ void run_process(const ProcessOptions& o) {
   const double fuse_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fuse_start).count();
   std::printf("%s", report_text(result).c_str());
   if (o.export_gsf && site.empty()) export_gsf(o, survey, result, corrected);
-  if (o.export_gsf && !site.empty()) std::printf("--export-gsf: not written for several surveys (not yet)\n");
+  if (o.export_gsf && !site.empty()) export_site_gsf(o, site, result);
   if (o.export_soundings) {
     const std::uint64_t n =
         write_soundings_csv(result.submaps, result.optimized_poses, std::filesystem::path(o.out) / "soundings.csv");
     std::printf("soundings.csv: %llu corrected soundings\n", static_cast<unsigned long long>(n));
   }
   std::printf("map %.2f m cells: %s (%.1f s)\n", fuse.resolution_m, map_files.c_str(), fuse_seconds);
-  for (std::size_t k = 1; k < site.size(); ++k) {
-    print_difference(write_difference_products(result, survey.metadata, fuse, 0, static_cast<int>(k), o.difference, o.out),
+  for (const auto& [before, after] : difference_pairs(static_cast<int>(site.size()))) {
+    print_difference(write_difference_products(result, survey.metadata, fuse, before, after, o.difference, o.out),
                      o.difference.k_sigma);
   }
   std::printf("total %.1f s; wrote %s/{trajectory.csv, report.json, *.png, map.tif, map.bag, tiles/}\n", seconds + fuse_seconds,
@@ -180,15 +215,18 @@ void add_process_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--export-gsf", options->export_gsf,
                 "also write the pings with the corrected navigation: GSF input file by file "
-                "(NAME.corrected.gsf, every record kept), a bundle as corrected.gsf");
+                "(NAME.corrected.gsf, every record kept), a bundle as corrected.gsf; several surveys each their own "
+                "(corrected.gsf for the first, corrected.K.gsf for the K-th)");
   cmd->add_flag("--export-soundings", options->export_soundings,
                 "also write soundings.csv: every corrected sounding (easting,northing,elevation,line,submap)");
   cmd->add_option("--change-sigmas", options->difference.k_sigma,
                   "several surveys: a cell changed between two of them beyond this many standard deviations is significant")
       ->check(CLI::Range(0.1, 100.0))
       ->capture_default_str();
+  cmd->add_option("--reference", options->reference,
+                  "several surveys: the one held in place (the datum; the first by default); differences are from it");
   cmd->add_option("--out", options->out, "output folder")->required();
-  cmd->callback([options] { run_process(*options); });
+  cmd->callback([options] { run_process(with_reference_first(*options)); });
 }
 
 }  // namespace bathyslam::cli

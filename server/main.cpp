@@ -29,6 +29,7 @@
 #include "server/scratch_dir.h"
 #include "server/services/job_service.h"
 #include "server/services/map_service.h"
+#include "server/services/site_service.h"
 #include "server/services/survey_service.h"
 #include "server/services/token_gate.h"
 #include "server/storage/migrations.h"
@@ -193,7 +194,8 @@ int serve(const ServeOptions& o) {
   storage::SurveyStore surveys(pool);
   storage::JobQueue jobs(pool, {std::chrono::seconds(o.lease_seconds), std::chrono::seconds(5)});
   storage::ResultStore results(pool);
-  service::ServiceContext context{surveys, jobs, results, o.limits, std::nullopt};
+  storage::SiteStore sites(pool);
+  service::ServiceContext context{surveys, jobs, results, sites, o.limits, std::nullopt};
   if (!o.dev_tenant.empty()) context.dev_tenant = tenant_named(pool, surveys, o.dev_tenant);
   const std::filesystem::path temp = std::filesystem::temp_directory_path();
   const std::filesystem::path scratch =
@@ -206,6 +208,7 @@ int serve(const ServeOptions& o) {
   service::JobEventBell job_event_bell(o.db);
   service::JobService job_service(context, job_event_bell);
   service::MapService map_service(context);
+  service::SiteService site_service(context);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -225,6 +228,7 @@ int serve(const ServeOptions& o) {
   builder.RegisterService(&survey_service);
   builder.RegisterService(&job_service);
   builder.RegisterService(&map_service);
+  builder.RegisterService(&site_service);
   builder.SetMaxReceiveMessageSize(2 << 20);  // a 1 MiB chunk and its envelope
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <string>
 
 #include "core/io/bundle.h"
 #include "core/pipeline/pipeline.h"
@@ -13,12 +14,16 @@
 namespace bathyslam {
 
 inline constexpr const char* kCorrectedGsfFile = "corrected.gsf";
+// A job of several surveys: the first survey's is corrected.gsf, the k-th's (k = 2..N)
+// corrected.<k>.gsf, as its trajectory is trajectory.<k>.csv.
+std::string corrected_gsf_name(int survey_number);
 
 // The pings that `read_pings` hands on (the survey's files read again: `survey` was read
 // without its soundings), with the corrected navigation. `read_pings` is stream_bundle for a
 // bundle, or the service's stored copy; a survey that no longer reads throws BundleError.
 // Returns how many pings were written (pings outside the corrected navigation are left out).
+// `survey_index`: the survey's place in a job of several (0: the first, or the only one).
 std::uint64_t write_corrected_gsf(const Survey& survey, const PipelineResult& result, const std::filesystem::path& path,
-                                  const std::function<BundleReadResult(PingSink&)>& read_pings);
+                                  const std::function<BundleReadResult(PingSink&)>& read_pings, int survey_index = 0);
 
 }  // namespace bathyslam

@@ -11,6 +11,16 @@
 
 namespace bathyslam {
 
+std::vector<std::pair<int, int>> difference_pairs(int surveys) {
+  std::vector<std::pair<int, int>> pairs;
+  for (int before = 0; before < surveys; ++before) {
+    for (int after = before + 1; after < surveys; ++after) {
+      if (surveys <= kAllDifferencesUpTo || before == 0 || after == before + 1) pairs.emplace_back(before, after);
+    }
+  }
+  return pairs;
+}
+
 DifferenceProducts write_difference_products(const PipelineResult& result, const SurveyMetadata& survey,
                                              const FuseConfig& fuse, int before, int after,
                                              const DifferenceConfig& config, const std::filesystem::path& dir) {

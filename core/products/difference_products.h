@@ -5,6 +5,8 @@
 // order the surveys were joined.
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -19,6 +21,14 @@ struct DifferenceProducts {
   DifferenceMap map;
   nlohmann::json summary;  // what <stem>.json holds; its "file" is null when no file was written
 };
+
+// Up to this many surveys a job makes the difference of every pair; beyond, 20 surveys would
+// make 190: each later survey's from the first and from the one before it.
+inline constexpr int kAllDifferencesUpTo = 5;
+
+// The pairs (before, after), 0-based, before < after, whose differences a job of `surveys` makes,
+// ordered by before, then after.
+std::vector<std::pair<int, int>> difference_pairs(int surveys);
 
 // The change from survey `before` to survey `after` (0-based) of the result's joined surveys.
 DifferenceProducts write_difference_products(const PipelineResult& result, const SurveyMetadata& survey,

@@ -316,26 +316,18 @@ void HttpApi::add_routes() {
     const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
     send_product(req, res, stored_map(context_, job, "bag", "application/x-hdf5"));
   });
-  route(R"(/v1/jobs/([0-9]+)/corrected\.gsf)", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
-    const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
-    const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
-    if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
-    send_product(req, res,
-                 {*size, "application/octet-stream", etag(job, "gsf", *size),
-                  [this, id = job.id](std::int64_t offset, std::int64_t length) {
-                    return context_.results.file_bytes(id, kCorrectedGsfFile, offset, length);
-                  }});
-  });
-  // A job of several surveys: the change from its first survey to survey k (map_service's DIFFERENCE).
-  route(R"(/v1/jobs/([0-9]+)/difference_1_([0-9]+)\.tif)",
+  // The job files: corrected.gsf (in a job of several surveys corrected.K.gsf for the K-th:
+  // map_service's GSF) and difference_J_K.tif (the change from survey J to K: its DIFFERENCE).
+  route(R"(/v1/jobs/([0-9]+)/(corrected(\.[0-9]+)?\.gsf|difference_[0-9]+_[0-9]+\.tif))",
         [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {
           const storage::JobRecord job = job_with_results(context_, tenant, id_in_path(req, 1, "job_id"));
-          const std::string name = "difference_1_" + std::string(req.matches[2]) + ".tif";
+          const std::string name = req.matches[2];
           const auto size = context_.results.file_size(job.id, name);
           if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name);
+          const char* type = name.ends_with(".gsf") ? "application/octet-stream"
+                                                    : "image/tiff; application=geotiff; profile=cloud-optimized";
           send_product(req, res,
-                       {*size, "image/tiff; application=geotiff; profile=cloud-optimized", etag(job, name, *size),
-                        [this, id = job.id, name](std::int64_t offset, std::int64_t length) {
+                       {*size, type, etag(job, name, *size), [this, id = job.id, name](std::int64_t offset, std::int64_t length) {
                           return context_.results.file_bytes(id, name, offset, length);
                         }});
         });

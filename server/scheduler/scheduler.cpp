@@ -188,7 +188,7 @@ void Scheduler::requeue_after_outage(const storage::Lease& lease, double seconds
 // What each stage produced, in the order of the pipeline. Everything an earlier try stored is
 // discarded first, so that the whole sequence can run again after a transient failure.
 void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-                      const std::optional<std::filesystem::path>& corrected_gsf, const SiteDifferences& differences,
+                      const std::vector<std::filesystem::path>& corrected_gsfs, const SiteDifferences& differences,
                       const nlohmann::json& failed_products,
                       const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel) {
   const std::int64_t id = job.lease.job_id;
@@ -212,7 +212,7 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
     if (map.grid.levels > 0) results.save_map_grid(id, map.grid);
   });
   step("corrected GSF", [&] {
-    if (corrected_gsf) results.put_file(id, kCorrectedGsfFile, *corrected_gsf);
+    for (const std::filesystem::path& gsf : corrected_gsfs) results.put_file(id, gsf.filename().string(), gsf);
     for (const DifferenceProducts& d : differences.products) {
       if (d.map.cells_compared > 0) results.put_file(id, d.stem + ".tif", differences.dir / (d.stem + ".tif"));
     }
@@ -277,7 +277,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     std::vector<Survey> site;
     JobInput input = survey_ids.size() == 1 ? read_job_input(reads.front(), config, fuse)
                                             : read_site_input(reads, names, config, fuse, site);
-    // Only the first survey is read again (its corrected GSF): the others' copies go now.
+    // The surveys are read again for their corrected GSF, one at a time: the later ones' copies
+    // go now (a site's copies together could fill the scratch disk) and are made again then.
     for (std::size_t k = 1; k < files.size(); ++k) files[k].reset();
     const Survey& survey = input.survey;
     event("load", 1, std::to_string(input.pings) + " pings");
@@ -303,38 +304,44 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const MapProducts map = make_map_products(result, survey.metadata, input.fuse, options_.scratch);
     event("map", 0.5, "writing the corrected GSF");
     const ScratchDir gsf_dir(options_.scratch, "gsf");
-    // The corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
-    std::optional<std::filesystem::path> gsf;
+    // Each corrected GSF stays a file (it can be as large as the upload) until stored chunk by chunk.
+    std::vector<std::filesystem::path> gsfs;
     nlohmann::json failed_products = nlohmann::json::array();
-    if (input.pings > 0) {
+    for (std::size_t k = 0; k < survey_ids.size() && input.pings > 0; ++k) {
+      const std::filesystem::path path = gsf_dir.path() / corrected_gsf_name(static_cast<int>(k) + 1);
+      if (!files[k])  // a database outage here is the job's to retry, not a missing product
+        retry_transient(name + ": loading " + names[k], options_.retry, cancel,
+                        [&] { files[k].emplace(surveys_, survey_ids[k], options_.scratch); });
       if (auto failure = optional_product(gsf_dir.path(), [&] {
-            write_corrected_gsf(survey, result, gsf_dir.path() / kCorrectedGsfFile,
-                                [&](PingSink& sink) { return files.front()->read(sink); });
+            write_corrected_gsf(k == 0 ? survey : site[k], result, path, [&](PingSink& sink) { return files[k]->read(sink); },
+                                static_cast<int>(k));
           })) {
-        log("job %lld: %s not written: %s", id, kCorrectedGsfFile, failure->c_str());
-        event("map", 0.75, std::string(kCorrectedGsfFile) + " not written: " + *failure);
-        failed_products.push_back({{"product", kCorrectedGsfFile}, {"reason", *failure}});
+        const std::string product = path.filename().string();
+        log("job %lld: %s not written: %s", id, product.c_str(), failure->c_str());
+        event("map", 0.75, product + " not written: " + *failure);
+        failed_products.push_back({{"product", product}, {"reason", *failure}});
       } else {
-        gsf = gsf_dir.path() / kCorrectedGsfFile;
+        gsfs.push_back(path);
       }
+      if (k > 0) files[k].reset();
     }
-    // Each later survey's change from the first: difference_1_K.tif stored as a file, its JSON in
-    // the report.
+    // The change between surveys (difference_pairs): difference_J_K.tif stored as a file, its
+    // JSON in the report.
     const ScratchDir difference_dir(options_.scratch, "difference");
     std::vector<DifferenceProducts> differences;
-    for (std::size_t k = 1; k < survey_ids.size(); ++k) {
+    for (const auto& [before, after] : difference_pairs(static_cast<int>(survey_ids.size()))) {
       // As the corrected GSF: a difference that cannot be written is reported, the map stands.
       if (auto failure = optional_product(difference_dir.path(), [&] {
-            differences.push_back(write_difference_products(result, survey.metadata, input.fuse, 0, static_cast<int>(k),
+            differences.push_back(write_difference_products(result, survey.metadata, input.fuse, before, after,
                                                             DifferenceConfig{}, difference_dir.path()));
           })) {
-        const std::string product = "difference_1_" + std::to_string(k + 1);
+        const std::string product = "difference_" + std::to_string(before + 1) + "_" + std::to_string(after + 1);
         log("job %lld: %s not written: %s", id, product.c_str(), failure->c_str());
         failed_products.push_back({{"product", product}, {"reason", *failure}});
       }
     }
     retry_transient(name + ": storing results", options_.retry, cancel, [&] {
-      store(job, result, map, gsf, {difference_dir.path(), differences}, failed_products,
+      store(job, result, map, gsfs, {difference_dir.path(), differences}, failed_products,
             [&](const char* what, double progress) { event("store", progress, what); }, cancel);
     });
     event("done", 1);

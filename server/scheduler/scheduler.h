@@ -55,7 +55,7 @@ class Scheduler {
     std::vector<DifferenceProducts> products;
   };
   void store(const storage::ClaimedJob& job, const PipelineResult& result, const MapProducts& map,
-             const std::optional<std::filesystem::path>& corrected_gsf, const SiteDifferences& differences,
+             const std::vector<std::filesystem::path>& corrected_gsfs, const SiteDifferences& differences,
              const nlohmann::json& failed_products,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);

@@ -35,6 +35,7 @@ void describe(const storage::JobRecord& job, v1::Job* reply) {
   reply->set_id(job.id);
   reply->set_survey_id(job.survey_id);
   for (std::int64_t id : job.more_survey_ids) reply->add_more_survey_ids(id);
+  reply->set_site_id(job.site_id.value_or(0));
   reply->set_configuration(job.configuration);
   reply->set_state(to_proto(job.state));
   reply->set_stage(job.stage);
@@ -92,39 +93,64 @@ PipelineConfig effective_config(const v1::SubmitJobRequest& request) {
 
 }  // namespace
 
-std::vector<std::int64_t> JobService::site_surveys(std::int64_t tenant, const storage::SurveyRecord& first,
-                                                   const v1::SubmitJobRequest& request) {
-  if (request.more_survey_ids_size() > kMaxSiteSurveys - 1)
-    throw invalid("more_survey_ids", std::to_string(request.more_survey_ids_size()) + " surveys; a job joins at most " +
-                                         std::to_string(kMaxSiteSurveys) + " with survey_id");
-  std::vector<std::int64_t> ids;
-  for (int k = 0; k < request.more_survey_ids_size(); ++k) {
-    const std::string field = "more_survey_ids[" + std::to_string(k) + "]";
-    const std::int64_t id = request.more_survey_ids(k);
-    if (id == first.id || std::find(ids.begin(), ids.end(), id) != ids.end())
-      throw invalid(field, "survey " + std::to_string(id) + " is already in the job");
-    const storage::SurveyRecord survey = owned_survey(context_, tenant, id, field);
+std::vector<JobService::NamedSurvey> JobService::requested_surveys(std::int64_t tenant,
+                                                                   const v1::SubmitJobRequest& request) {
+  std::vector<NamedSurvey> surveys;
+  if (request.site_id() != 0) {
+    if (request.survey_id() != 0 || request.more_survey_ids_size() > 0)
+      throw invalid("site_id", "a job names a site or its surveys (survey_id, more_survey_ids), not both");
+    const storage::SiteRecord site = owned_site(context_, tenant, request.site_id());
+    if (site.survey_ids.empty())
+      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
+                    "site_id: site " + std::to_string(site.id) + " has no surveys; add some first (AddSurveys)");
+    for (std::int64_t id : site.survey_ids) surveys.push_back({id, "site_id: survey " + std::to_string(id)});
+  } else {
+    if (request.more_survey_ids_size() > kMaxSiteSurveys - 1)
+      throw invalid("more_survey_ids", std::to_string(request.more_survey_ids_size()) + " surveys; a job joins at most " +
+                                           std::to_string(kMaxSiteSurveys) + " with survey_id");
+    surveys.push_back({request.survey_id(), "survey_id"});
+    for (int k = 0; k < request.more_survey_ids_size(); ++k)
+      surveys.push_back({request.more_survey_ids(k), "more_survey_ids[" + std::to_string(k) + "]"});
+  }
+  if (request.reference_survey_id() != 0) {
+    auto reference = std::find_if(surveys.begin(), surveys.end(),
+                                  [&](const NamedSurvey& s) { return s.id == request.reference_survey_id(); });
+    if (reference == surveys.end())
+      throw invalid("reference_survey_id", "survey " + std::to_string(request.reference_survey_id()) +
+                                               " is not one of the job's surveys");
+    std::rotate(surveys.begin(), reference, reference + 1);
+  }
+  return surveys;
+}
+
+storage::SurveyRecord JobService::check_surveys(std::int64_t tenant, const std::vector<NamedSurvey>& surveys) {
+  std::vector<storage::SurveyRecord> records;
+  for (const NamedSurvey& named : surveys) {
+    const storage::SurveyRecord survey = owned_survey(context_, tenant, named.id, named.field);
+    const bool twice = std::any_of(records.begin(), records.end(), [&](const auto& r) { return r.id == survey.id; });
+    if (twice) throw invalid(named.field, "survey " + std::to_string(survey.id) + " is already in the job");
     if (!survey.ready)
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
-                    field + ": survey " + std::to_string(id) + " is not ready; finalize it without errors first");
-    if (survey.crs != first.crs)
-      throw invalid(field, "survey " + std::to_string(id) + " is in " + survey.crs + ", survey " + std::to_string(first.id) +
-                               " in " + first.crs + ": surveys of one site share a CRS");
-    ids.push_back(id);
+                    named.field + ": survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
+    if (!records.empty() && survey.crs != records.front().crs)
+      throw invalid(named.field, "survey " + std::to_string(survey.id) + " is in " + survey.crs + ", survey " +
+                                     std::to_string(records.front().id) + " in " + records.front().crs +
+                                     ": surveys of one site share a CRS");
+    records.push_back(survey);
   }
-  return ids;
+  return records.front();
 }
 
 grpc::Status JobService::SubmitJob(grpc::ServerContext* call, const v1::SubmitJobRequest* request, v1::Job* reply) {
   return handle("SubmitJob", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
-    const storage::SurveyRecord survey = owned_survey(context_, tenant, request->survey_id());
+    const std::vector<NamedSurvey> surveys = requested_surveys(tenant, *request);
+    owned_survey(context_, tenant, surveys.front().id, surveys.front().field);  // NOT_FOUND before anything else
     const PipelineConfig config = effective_config(*request);
-    if (!survey.ready)
-      throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
-                    "survey_id: survey " + std::to_string(survey.id) + " is not ready; finalize it without errors first");
-    storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts,
-                        site_surveys(tenant, survey, *request)};
+    const storage::SurveyRecord survey = check_surveys(tenant, surveys);
+    storage::NewJob job{survey.id, to_string(config.configuration), parameters(config), context_.limits.max_attempts};
+    for (std::size_t k = 1; k < surveys.size(); ++k) job.more_survey_ids.push_back(surveys[k].id);
+    if (request->site_id() != 0) job.site_id = request->site_id();
     const std::optional<std::int64_t> queued =
         context_.jobs.enqueue_within_limit(job, tenant, context_.limits.max_active_jobs);
     if (!queued)
@@ -210,8 +236,10 @@ grpc::Status JobService::ListJobs(grpc::ServerContext* call, const v1::ListJobsR
     const std::int64_t tenant = caller_tenant(context_, *call);
     std::optional<std::int64_t> survey;
     if (request->survey_id() != 0) survey = owned_survey(context_, tenant, request->survey_id()).id;
+    std::optional<std::int64_t> site;
+    if (request->site_id() != 0) site = owned_site(context_, tenant, request->site_id()).id;
     const int size = page_size(request->page_size());
-    auto jobs = context_.jobs.list_jobs(tenant, survey, page_token(request->page_token()), size + 1);
+    auto jobs = context_.jobs.list_jobs(tenant, survey, page_token(request->page_token()), size + 1, site);
     const bool more = trim_to_page(jobs, size);
     for (const storage::JobRecord& job : jobs) describe(job, reply->add_jobs());
     if (more) reply->set_next_page_token(std::to_string(jobs.back().id));

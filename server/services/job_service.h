@@ -1,6 +1,7 @@
 #pragma once
 // bathyslam.v1.JobService: submit SLAM jobs, follow them, cancel them, read their reports.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "bathyslam/v1/job.grpc.pb.h"
@@ -24,10 +25,16 @@ class JobService final : public v1::JobService::Service {
   grpc::Status GetReport(grpc::ServerContext* call, const v1::GetReportRequest* request, v1::Report* reply) override;
 
  private:
-  // A job of several surveys: the others of the request, each the caller's, ready, not twice,
-  // in `first`'s CRS; refused naming more_survey_ids[k].
-  std::vector<std::int64_t> site_surveys(std::int64_t tenant, const storage::SurveyRecord& first,
-                                         const v1::SubmitJobRequest& request);
+  // One of a job's surveys as the request named it: the field a refusal names.
+  struct NamedSurvey {
+    std::int64_t id = 0;
+    std::string field;
+  };
+  // The job's surveys in order, the datum first: the site's (site_id) or survey_id and
+  // more_survey_ids, with reference_survey_id moved to the front.
+  std::vector<NamedSurvey> requested_surveys(std::int64_t tenant, const v1::SubmitJobRequest& request);
+  // Each of `surveys` the caller's, ready, not twice, in one CRS; the first's record.
+  storage::SurveyRecord check_surveys(std::int64_t tenant, const std::vector<NamedSurvey>& surveys);
   ServiceContext& context_;
   JobEventBell& bell_;
   StreamSlots watch_slots_;

@@ -7,6 +7,7 @@
 
 #include "core/io/crs.h"
 #include "core/products/corrected_gsf.h"
+#include "core/products/difference_products.h"
 
 namespace bathyslam::server {
 namespace {
@@ -154,21 +155,36 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
     if (request->format() == v1::DIFFERENCE) {
       const int last = 1 + static_cast<int>(job.more_survey_ids.size());
       if (last == 1) throw invalid("format", "job " + std::to_string(job.id) + " has one survey: nothing to difference");
-      if (request->epoch() < 2 || request->epoch() > last)
+      const int before = request->from_epoch() == 0 ? 1 : request->from_epoch();
+      if (before < 1 || before >= last)
+        throw invalid("from_epoch", std::to_string(request->from_epoch()) + " is not an earlier survey of job " +
+                                        std::to_string(job.id) + " (1 to " + std::to_string(last - 1) + ")");
+      if (request->epoch() <= before || request->epoch() > last)
         throw invalid("epoch", std::to_string(request->epoch()) + " is not a later survey of job " + std::to_string(job.id) +
-                                   " (2 to " + std::to_string(last) + ")");
-      const std::string name = "difference_1_" + std::to_string(request->epoch()) + ".tif";
+                                   " (" + std::to_string(before + 1) + " to " + std::to_string(last) + ")");
+      const std::string name = "difference_" + std::to_string(before) + "_" + std::to_string(request->epoch()) + ".tif";
       const auto size = context_.results.file_size(job.id, name);
+      const auto pairs = difference_pairs(last);
+      const bool made = std::find(pairs.begin(), pairs.end(), std::pair{before - 1, request->epoch() - 1}) != pairs.end();
       if (!size)
-        throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name +
-                                                       " (the surveys share no cell of the map: see the report)");
+        throw Refusal(grpc::StatusCode::NOT_FOUND,
+                      "job " + std::to_string(job.id) + " has no " + name +
+                          (made ? " (the surveys share no cell of the map: see the report)"
+                                : " (a job of more than " + std::to_string(kAllDifferencesUpTo) +
+                                      " surveys has each survey's difference from the first and from the one before)"));
       stream_file(call, context_, job.id, name, *size, writer);
       return;
     }
     if (format.empty()) {
-      const auto size = context_.results.file_size(job.id, kCorrectedGsfFile);
-      if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no corrected GSF");
-      stream_file(call, context_, job.id, kCorrectedGsfFile, *size, writer);
+      // A job of several surveys has one corrected GSF per survey: epoch 1 (or 0) the first's.
+      const int last = 1 + static_cast<int>(job.more_survey_ids.size());
+      if (request->epoch() < 0 || request->epoch() > last)
+        throw invalid("epoch", std::to_string(request->epoch()) + " is not a survey of job " + std::to_string(job.id) +
+                                   " (1 to " + std::to_string(last) + ")");
+      const std::string name = corrected_gsf_name(request->epoch());
+      const auto size = context_.results.file_size(job.id, name);
+      if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name);
+      stream_file(call, context_, job.id, name, *size, writer);
       return;
     }
     auto data = context_.results.tile(job.id, {format, 0, 0, 0});

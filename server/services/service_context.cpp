@@ -55,6 +55,13 @@ storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant,
   return *survey;
 }
 
+storage::SiteRecord owned_site(ServiceContext& context, std::int64_t tenant, std::int64_t site_id) {
+  if (site_id <= 0) throw invalid("site_id", "must be positive");
+  auto site = context.sites.site(site_id);
+  if (!site || site->tenant_id != tenant) throw Refusal(grpc::StatusCode::NOT_FOUND, "site_id: no site " + std::to_string(site_id));
+  return *site;
+}
+
 storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id) {
   if (job_id <= 0) throw invalid("job_id", "must be positive");
   auto job = context.jobs.job(job_id);

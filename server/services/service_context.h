@@ -13,6 +13,7 @@
 #include "server/services/stream_slots.h"
 #include "server/storage/job_queue.h"
 #include "server/storage/result_store.h"
+#include "server/storage/site_store.h"
 #include "server/storage/survey_store.h"
 
 namespace bathyslam::server {
@@ -35,6 +36,7 @@ struct ServiceContext {
   storage::SurveyStore& surveys;
   storage::JobQueue& jobs;
   storage::ResultStore& results;
+  storage::SiteStore& sites;
   Limits limits;
   // Callers without a token act as this tenant (--dev-tenant); nullopt: a token is required.
   std::optional<std::int64_t> dev_tenant;
@@ -84,6 +86,7 @@ std::int64_t tenant_of_authorization(const ServiceContext& context, const std::s
 storage::SurveyRecord owned_survey(ServiceContext& context, std::int64_t tenant, std::int64_t survey_id,
                                    const std::string& field = "survey_id");
 storage::JobRecord owned_job(ServiceContext& context, std::int64_t tenant, std::int64_t job_id);
+storage::SiteRecord owned_site(ServiceContext& context, std::int64_t tenant, std::int64_t site_id);
 // owned_job for the calls that serve a job's results (map, tiles, trajectory, report): a
 // cancelled job's are never served, FAILED_PRECONDITION, whatever a cancel during the store
 // stage left behind until its worker removes it.

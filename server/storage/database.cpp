@@ -2,6 +2,7 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -67,6 +68,16 @@ std::string float8_array(const double* values, std::size_t count) {
     text += shortest(values[i]);
   }
   return text + "}";
+}
+
+std::vector<std::int64_t> parse_id_list(std::string_view list) {
+  std::vector<std::int64_t> ids;
+  while (!list.empty()) {
+    const std::size_t comma = std::min(list.find(','), list.size());
+    ids.push_back(std::stoll(std::string(list.substr(0, comma))));
+    list.remove_prefix(std::min(comma + 1, list.size()));
+  }
+  return ids;
 }
 
 std::vector<double> parse_float8_array(std::string_view text) {

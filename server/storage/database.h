@@ -70,6 +70,8 @@ class Param {
 // information matrices round-trip bit for bit.
 std::string float8_array(const double* values, std::size_t count);
 std::vector<double> parse_float8_array(std::string_view text);
+// Ids as string_agg(id::text, ',') gives them ("" for none).
+std::vector<std::int64_t> parse_id_list(std::string_view list);
 
 // Owns a PGresult; cells are read as text (PostgreSQL's text output of float8 is exact).
 class Result {

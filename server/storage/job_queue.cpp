@@ -78,17 +78,6 @@ int active_jobs_of(Connection& connection, std::int64_t tenant_id) {
                               .int64(0, "active"));
 }
 
-// The ids of `list`, comma-separated ("" for none), as a job's more_survey_ids are read.
-std::vector<std::int64_t> ids_of(std::string_view list) {
-  std::vector<std::int64_t> ids;
-  while (!list.empty()) {
-    const std::size_t comma = std::min(list.find(','), list.size());
-    ids.push_back(std::stoll(std::string(list.substr(0, comma))));
-    list.remove_prefix(std::min(comma + 1, list.size()));
-  }
-  return ids;
-}
-
 constexpr std::string_view kMoreSurveyIds =
     "coalesce((SELECT string_agg(survey_id::text, ',' ORDER BY position) FROM job_surveys WHERE job_id = j.id), '')"
     " AS more_survey_ids";
@@ -98,10 +87,11 @@ std::int64_t insert_job(Connection& connection, const NewJob& job, const nlohman
   // NOTIFY is delivered at commit, so a woken worker always finds the job.
   const std::int64_t id = connection
                               .exec(
-                                  "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts)"
-                                  " VALUES ($1, $2, $3, $4) RETURNING id)"
+                                  "WITH job AS (INSERT INTO jobs (survey_id, configuration, parameters, max_attempts, site_id)"
+                                  " VALUES ($1, $2, $3, $4, $6) RETURNING id)"
                                   " SELECT id, pg_notify($5, id::text) FROM job",
-                                  {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel})
+                                  {job.survey_id, job.configuration, parameters.dump(), job.max_attempts, kChannel,
+                                   job.site_id})
                               .int64(0, "id");
   for (std::size_t k = 0; k < job.more_survey_ids.size(); ++k) {
     connection.exec("INSERT INTO job_surveys (job_id, position, survey_id) VALUES ($1, $2, $3)",
@@ -152,7 +142,7 @@ std::optional<ClaimedJob> JobQueue::claim(const std::string& worker) {
   job.survey_id = row.int64(0, "survey_id");
   job.configuration = row.text(0, "configuration");
   job.parameters = nlohmann::json::parse(row.text(0, "parameters"));
-  job.more_survey_ids = ids_of(row.text(0, "more_survey_ids"));
+  job.more_survey_ids = parse_id_list(row.text(0, "more_survey_ids"));
   return job;
 }
 
@@ -308,7 +298,7 @@ JobStatus JobQueue::status(std::int64_t job_id) {
 namespace {
 
 const std::string kJobColumns =
-    "SELECT j.id, j.survey_id, s.tenant_id, j.configuration, j.state, j.attempts, j.error, j.parameters,"
+    "SELECT j.id, j.survey_id, j.site_id, s.tenant_id, j.configuration, j.state, j.attempts, j.error, j.parameters,"
     " extract(epoch FROM j.created_at)::float8 AS created_at,"
     " coalesce(extract(epoch FROM j.started_at)::float8, 0) AS started_at,"
     " coalesce(extract(epoch FROM j.finished_at)::float8, 0) AS finished_at,"
@@ -323,6 +313,7 @@ std::vector<JobRecord> job_records(const Result& rows) {
     JobRecord job;
     job.id = rows.int64(row, "id");
     job.survey_id = rows.int64(row, "survey_id");
+    job.site_id = rows.optional_int64(row, "site_id");
     job.tenant_id = rows.int64(row, "tenant_id");
     job.configuration = rows.text(row, "configuration");
     job.state = parse_job_state(rows.text(row, "state"));
@@ -334,7 +325,7 @@ std::vector<JobRecord> job_records(const Result& rows) {
     job.finished_at = rows.float8(row, "finished_at");
     job.stage = rows.text(row, "stage");
     job.progress = rows.float8(row, "progress");
-    job.more_survey_ids = ids_of(rows.text(row, "more_survey_ids"));
+    job.more_survey_ids = parse_id_list(rows.text(row, "more_survey_ids"));
     jobs.push_back(std::move(job));
   }
   return jobs;
@@ -350,13 +341,15 @@ std::optional<JobRecord> JobQueue::job(std::int64_t job_id) {
 }
 
 std::vector<JobRecord> JobQueue::list_jobs(std::int64_t tenant_id, std::optional<std::int64_t> survey_id,
-                                           std::int64_t before_id, int limit) {
+                                           std::int64_t before_id, int limit, std::optional<std::int64_t> site_id) {
   auto connection = pool_.acquire();
   return job_records(connection->exec(
       kJobColumns +
-          " WHERE s.tenant_id = $1 AND ($2::bigint IS NULL OR j.survey_id = $2) AND ($3::bigint = 0 OR j.id < $3)"
+          " WHERE s.tenant_id = $1 AND ($3::bigint = 0 OR j.id < $3) AND ($5::bigint IS NULL OR j.site_id = $5)"
+          " AND ($2::bigint IS NULL OR j.survey_id = $2"
+          " OR EXISTS (SELECT 1 FROM job_surveys js WHERE js.job_id = j.id AND js.survey_id = $2))"
           " ORDER BY j.id DESC LIMIT $4",
-      {tenant_id, survey_id, before_id, limit}));
+      {tenant_id, survey_id, before_id, limit, site_id}));
 }
 
 int JobQueue::active_jobs(std::int64_t tenant_id) {

@@ -38,6 +38,7 @@ struct NewJob {
   int max_attempts = 3;
   // Several surveys of one site (issue 33): the others, joined after survey_id in this order.
   std::vector<std::int64_t> more_survey_ids = {};
+  std::optional<std::int64_t> site_id = std::nullopt;  // the site it was submitted for
 };
 
 // One claim of one job. The attempt number tells a worker's claim apart from a later one of the
@@ -93,6 +94,7 @@ struct JobRecord {
   std::int64_t id = 0;
   std::int64_t survey_id = 0;
   std::vector<std::int64_t> more_survey_ids;
+  std::optional<std::int64_t> site_id;
   std::int64_t tenant_id = 0;
   std::string configuration;
   JobState state = JobState::kQueued;
@@ -155,9 +157,10 @@ class JobQueue {
   JobStatus status(std::int64_t job_id);  // throws std::out_of_range for an unknown id
 
   std::optional<JobRecord> job(std::int64_t job_id);
-  // A tenant's jobs, newest first, below `before_id` (0: from the newest), of one survey or all.
+  // A tenant's jobs, newest first, below `before_id` (0: from the newest): all, or those that
+  // join `survey_id` (first or later), or were submitted for `site_id`.
   std::vector<JobRecord> list_jobs(std::int64_t tenant_id, std::optional<std::int64_t> survey_id,
-                                   std::int64_t before_id, int limit);
+                                   std::int64_t before_id, int limit, std::optional<std::int64_t> site_id = std::nullopt);
   int active_jobs(std::int64_t tenant_id);  // queued or running
   std::vector<StoredJobEvent> events_after(std::int64_t job_id, std::int64_t after_event_id);
 

@@ -16,6 +16,19 @@ for epoch in 1 2; do
   "$BATHYSLAM" process "$work/e$epoch" --config mchs --threads 2 --out "$work/alone$epoch" > /dev/null 2>&1
 done
 "$BATHYSLAM" process "$work/e1" "$work/e2" --config odometry --out "$work/joint-odometry" > /dev/null 2>&1
+# --reference: the second survey held; each survey's own corrected GSF (the datum's corrected.gsf).
+"$BATHYSLAM" process "$work/e1" "$work/e2" --config odometry --reference "$work/e2" --export-gsf --out "$work/ref" \
+  > "$work/ref.txt" 2>&1 || { cat "$work/ref.txt"; exit 1; }
+pings() { "$BATHYSLAM" inspect "$@" | awk '/^counts/ {print $2}'; }
+for pair in "corrected.gsf e2" "corrected.2.gsf e1"; do
+  set -- $pair
+  [ "$(pings "$work/ref/$1")" = "$(pings "$work/$2")" ] ||
+    { echo "ref/$1: $(pings "$work/ref/$1") pings, $2 has $(pings "$work/$2")" >&2; exit 1; }
+done
+if "$BATHYSLAM" process "$work/e1" "$work/e2" --reference "$work/alone1" --out "$work/x" > "$work/x.txt" 2>&1; then
+  echo "a --reference that is not one of the surveys was taken" >&2; exit 1
+fi
+grep -q -- "--reference: .*alone1 is not one of the surveys" "$work/x.txt" || { cat "$work/x.txt"; exit 1; }
 "$BATHYSLAM" process "$work/e1" "$work/e2" --config mchs --threads 2 --out "$work/joint" > "$work/joint.txt" 2>&1
 grep "survey at submap" "$work/joint.txt"
 [ -f "$work/joint/trajectory.2.csv" ] || { echo "no corrected trajectory of the second survey" >&2; exit 1; }

@@ -67,6 +67,17 @@ done
 "$BATHYSLAM" report "$job" --json | python3 -c 'import json, sys; r = json.load(sys.stdin); assert r["configuration"] == "gicp"'
 "$BATHYSLAM" jobs | grep -Eq "^ +$job +$survey +gicp +succeeded" || fail "jobs: $("$BATHYSLAM" jobs)"
 
+# A site: created, a survey added (not twice), listed, a job submitted by it and listed by it.
+site=$("$BATHYSLAM" site create harbour | awk '/^site/ {print $2}')
+"$BATHYSLAM" site add "$site" "$survey" | grep -q "surveys $survey " || fail "site add"
+if "$BATHYSLAM" site add "$site" "$survey" 2> "$work/twice.err"; then fail "a survey added to a site twice"; fi
+grep -q "INVALID_ARGUMENT: survey_ids: survey $survey is in site $site already" "$work/twice.err" || fail "$(cat "$work/twice.err")"
+"$BATHYSLAM" site list | grep -Eq "^ +$site +.* harbour +$survey$" || fail "site list: $("$BATHYSLAM" site list)"
+site_job=$("$BATHYSLAM" submit --site "$site" --config odometry | awk '/^job/ {print $2}')
+"$BATHYSLAM" watch "$site_job" > /dev/null 2>&1 || fail "the site's job"
+"$BATHYSLAM" jobs --site "$site" | grep -Eq "^ +$site_job +$survey +odometry +succeeded" || fail "jobs --site"
+[ "$("$BATHYSLAM" jobs --site "$site" | wc -l)" = 2 ] || fail "jobs --site lists other jobs: $("$BATHYSLAM" jobs --site "$site")"
+
 # The map: every tile, then those meeting a box around one tile's centre; the whole map as a COG
 # and as a BAG.
 "$BATHYSLAM" tiles "$job" --out "$work/tiles" > "$work/tiles.out" || fail "tiles"

@@ -12,11 +12,12 @@ import grpc
 from google.protobuf import descriptor_pb2, symbol_database
 
 from service_api_test import (Server, database_fingerprint, job_pb2, map_pb2, psql, read, ready_survey,
-                              restart_asking_for_tokens, survey_pb2, upload_requests)
+                              restart_asking_for_tokens, site_pb2, survey_pb2, upload_requests)
 from reliability_test import final_state
 
 SERVICES = [module.DESCRIPTOR.services_by_name[name]
-            for module, name in ((survey_pb2, "SurveyService"), (job_pb2, "JobService"), (map_pb2, "MapService"))]
+            for module, name in ((survey_pb2, "SurveyService"), (job_pb2, "JobService"), (map_pb2, "MapService"),
+                                 (site_pb2, "SiteService"))]
 NOBODY = ("no token", "wrong token", "revoked token")
 
 
@@ -45,6 +46,8 @@ class IsolationMatrixTest(unittest.TestCase):
         assert final_state(s, job.id).state == job_pb2.SUCCEEDED, s.server_log()
         cls.job = job.id
         cls.tile = next(t for t in s.maps.GetMapInfo(map_pb2.GetMapInfoRequest(job_id=job.id), timeout=30).tiles)
+        cls.site = s.sites.CreateSite(site_pb2.CreateSiteRequest(name="site"), timeout=30).id
+        s.sites.AddSurveys(site_pb2.AddSurveysRequest(site_id=cls.site, survey_ids=[cls.ready]), timeout=30)
         cls.tokens = restart_asking_for_tokens(s)
         cls.owner_tenant, cls.intruder_tenant = (int(psql(s.url, f"SELECT id FROM tenants WHERE name = '{name}'"))
                                                  for name in ("owner", "intruder"))
@@ -77,6 +80,13 @@ class IsolationMatrixTest(unittest.TestCase):
                             format=map_pb2.GEOTIFF),
             "GetMap": dict(job_id=self.job),
             "GetTrajectory": dict(job_id=self.job),
+            "CreateSite": dict(name=f"created {self.created}"),
+            # The owner adds a survey that the next case takes out again.
+            "AddSurveys": dict(site_id=self.site, survey_ids=[self.uploading]),
+            "RemoveSurveys": dict(site_id=self.site, survey_ids=[self.uploading]),
+            "GetSite": dict(site_id=self.site),
+            "ListSites": dict(),
+            "DeleteSite": dict(site_id=self.site),
         }
         self.assertIn(method.name, cases, f"{method.full_name} has no case in the isolation matrix")
         if method.name == "UploadFile":
@@ -101,19 +111,22 @@ class IsolationMatrixTest(unittest.TestCase):
 
     def fingerprint(self):
         """The whole database but another tenant's surveys: what it may create in its own space."""
-        return database_fingerprint(self.server.url, {"surveys": f"tenant_id <> {self.intruder_tenant}"})
+        return database_fingerprint(self.server.url, {"surveys": f"tenant_id <> {self.intruder_tenant}",
+                                                      "sites": f"tenant_id <> {self.intruder_tenant}"})
 
     def owner_ids(self):
-        surveys = {s.id for s in self.server.surveys.ListSurveys(
+        """The owner's surveys, job and site as (list field, id): ids of different kinds may be equal."""
+        surveys = {("surveys", s.id) for s in self.server.surveys.ListSurveys(
             survey_pb2.ListSurveysRequest(), metadata=[("authorization", "Bearer " + self.tokens["owner"])], timeout=30).surveys}
-        return surveys | {self.job}
+        return surveys | {("jobs", self.job), ("sites", self.site)}
 
     def listed(self, replies):
-        return {item.id for reply in replies for item in getattr(reply, "surveys", getattr(reply, "jobs", []))}
+        return {(field, item.id) for reply in replies for field in ("surveys", "jobs", "sites")
+                for item in getattr(reply, field, [])}
 
     def test_every_rpc_against_every_caller(self):
         methods = [method for service in SERVICES for method in service.methods]
-        self.assertGreaterEqual(len(methods), 17)
+        self.assertGreaterEqual(len(methods), 23)
         # Nothing a refused caller sends changes the owner's data or anyone else's; what another
         # tenant creates in its own space (CreateSurvey) is left out of the comparison.
         before = self.fingerprint()
@@ -128,12 +141,12 @@ class IsolationMatrixTest(unittest.TestCase):
             with self.subTest(method=method.name, caller="another tenant"):
                 code, details, replies = self.call(method, "another tenant")
                 self.assertNotEqual(code, grpc.StatusCode.PERMISSION_DENIED, details)
-                if method.name in ("ListSurveys", "ListJobs", "CreateSurvey"):
+                if method.name in ("ListSurveys", "ListJobs", "ListSites", "CreateSurvey", "CreateSite"):
                     self.assertEqual(code, grpc.StatusCode.OK, details)
                     self.assertFalse(self.listed(replies) & self.owner_ids(), "another tenant lists the owner's data")
                 else:
                     self.assertEqual(code, grpc.StatusCode.NOT_FOUND, details)
-                    self.assertRegex(details, r"^(survey_id|job_id): no (survey|job) \d+$")
+                    self.assertRegex(details, r"^(survey_id|job_id|site_id): no (survey|job|site) \d+$")
                 self.assertEqual(self.fingerprint(), before,
                                  "another tenant's call changed the database")
         # Then the owner, who may change things: DeleteSurvey last, as it removes what it is aimed at.
@@ -143,7 +156,7 @@ class IsolationMatrixTest(unittest.TestCase):
                 # A finished job cannot be cancelled: refused for what it is, not for who asks.
                 expected = grpc.StatusCode.FAILED_PRECONDITION if method.name == "CancelJob" else grpc.StatusCode.OK
                 self.assertEqual(code, expected, details)
-                if method.name in ("ListSurveys", "ListJobs"):
+                if method.name in ("ListSurveys", "ListJobs", "ListSites"):
                     self.assertTrue(self.listed(replies) & self.owner_ids(), f"{method.name} misses the owner's data")
         self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
 

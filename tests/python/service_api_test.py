@@ -30,7 +30,8 @@ subprocess.run(["protoc", "-I", HERE, "--python_out", STUBS, "--grpc_python_out"
                 "--plugin=protoc-gen-grpc_python=/usr/bin/grpc_python_plugin", "health.proto"], check=True)
 sys.path.insert(0, STUBS)
 sys.path.insert(0, ENV["BATHYSLAM_PYTHONPATH"])
-from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc  # noqa: E402
+from bathyslam.v1 import (job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, site_pb2, site_pb2_grpc,  # noqa: E402
+                          survey_pb2, survey_pb2_grpc)
 import health_pb2, health_pb2_grpc  # noqa: E402
 
 CHUNK = 1 << 20
@@ -127,6 +128,7 @@ class Server:
         self.surveys = survey_pb2_grpc.SurveyServiceStub(self.channel)
         self.jobs = job_pb2_grpc.JobServiceStub(self.channel)
         self.maps = map_pb2_grpc.MapServiceStub(self.channel)
+        self.sites = site_pb2_grpc.SiteServiceStub(self.channel)
         self.health = health_pb2_grpc.HealthStub(self.channel)
 
     def server_log(self):

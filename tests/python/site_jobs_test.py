@@ -14,7 +14,7 @@ import grpc
 from osgeo import gdal
 
 from http_api_test import HttpServer
-from service_api_test import STUBS, database_fingerprint, psql, restart_asking_for_tokens, survey_pb2
+from service_api_test import STUBS, database_fingerprint, job_pb2, psql, restart_asking_for_tokens, site_pb2, survey_pb2
 
 import bathyslam  # noqa: E402  (the Python client, on the path service_api_test puts)
 
@@ -82,6 +82,59 @@ class SiteJobsTest(unittest.TestCase):
         finally:
             psql(self.server.url, f"UPDATE surveys SET crs = 'EPSG:32651' WHERE id = {self.second}")
 
+    def assert_refused(self, call, code, message):
+        before = database_fingerprint(self.server.url)
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            call()
+        self.assertEqual(raised.exception.code, code, raised.exception)
+        self.assertRegex(str(raised.exception), message)
+        self.assertEqual(database_fingerprint(self.server.url), before, "a refusal changed the database")
+
+    def test_site_groups_surveys_for_a_job(self):
+        site = self.owner.create_site("harbour")
+        self.assert_refused(lambda: self.owner.create_site("harbour"), grpc.StatusCode.ALREADY_EXISTS,
+                            rf"name: site {site} is named 'harbour' already")
+        self.assertEqual(self.owner.add_surveys(site, [self.first, self.second])["survey_ids"], [self.first, self.second])
+        self.assert_refused(lambda: self.owner.add_surveys(site, [self.first]), grpc.StatusCode.INVALID_ARGUMENT,
+                            rf"survey_ids: survey {self.first} is in site {site} already")
+        theirs = self.intruder._call("CreateSurvey", self.intruder._surveys.CreateSurvey,
+                                     survey_pb2.CreateSurveyRequest(name="their site survey", crs="EPSG:32651")).id
+        self.assert_refused(lambda: self.owner.add_surveys(site, [theirs]), grpc.StatusCode.NOT_FOUND,
+                            rf"survey_ids\[0\]: no survey {theirs}")
+        self.assert_refused(lambda: self.intruder.submit(site_id=site), grpc.StatusCode.NOT_FOUND, rf"site_id: no site {site}")
+        self.assert_refused(lambda: self.intruder.site(site), grpc.StatusCode.NOT_FOUND, rf"site_id: no site {site}")
+        self.assert_refused(lambda: self.owner.submit(self.first, site_id=site), grpc.StatusCode.INVALID_ARGUMENT,
+                            r"site_id: a job names a site or its surveys")
+        self.assert_refused(lambda: self.owner.submit(site_id=site, reference_survey_id=999999),
+                            grpc.StatusCode.INVALID_ARGUMENT, r"reference_survey_id: survey 999999 is not one of")
+        # The second survey held in place: it is the job's datum and the first comes after it.
+        job = self.owner.submit(site_id=site, config="odometry", reference_survey_id=self.second)
+        described = self.owner.job(job)
+        self.assertEqual((described["survey_id"], described["more_survey_ids"], described["site_id"]),
+                         (self.second, [self.first], site))
+        self.assertEqual(self.owner.watch(job)["state"], "succeeded")
+        listed = self.owner._call("ListJobs", self.owner._jobs.ListJobs, job_pb2.ListJobsRequest(site_id=site)).jobs
+        self.assertEqual([j.id for j in listed], [job])
+        by_later_survey = self.owner._call("ListJobs", self.owner._jobs.ListJobs, job_pb2.ListJobsRequest(survey_id=self.first))
+        self.assertIn(job, [j.id for j in by_later_survey.jobs], "a job is listed under each of its surveys")
+        # Each survey's own corrected GSF, its pings at that survey's corrected navigation.
+        gsfs = [self.owner.download_map(job, os.path.join(STUBS, f"site-{k}.gsf"), format="gsf", epoch=k) for k in (1, 2)]
+        for path, survey in zip(gsfs, (self.second, self.first)):
+            inspected = subprocess.run([os.environ["BATHYSLAM"], "inspect", path, "--crs", "EPSG:32651", "--json"],
+                                       check=True, capture_output=True, text=True).stdout
+            summary = json.loads(self.owner._call("GetSurvey", self.owner._surveys.GetSurvey,
+                                                  survey_pb2.GetSurveyRequest(survey_id=survey)).summary_json)
+            pings, expected = json.loads(inspected)["survey"]["counts"]["pings"], summary["counts"]["pings"]
+            # Pings beyond the corrected navigation's ends are left out: a few at most.
+            self.assertLessEqual(abs(pings - expected), 0.01 * expected, path)
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            self.owner.download_map(job, os.path.join(STUBS, "x.gsf"), format="gsf", epoch=3)
+        self.assertRegex(str(raised.exception), r"epoch: 3 is not a survey of job \d+ \(1 to 2\)")
+        # Deleting the site leaves its surveys and jobs.
+        self.owner._call("DeleteSite", self.owner._sites.DeleteSite, site_pb2.DeleteSiteRequest(site_id=site))
+        self.assertEqual(self.owner.job(job)["site_id"], 0)
+        self.assertEqual(self.owner.job(job)["state"], "succeeded")
+
     def test_two_epochs_in_one_job(self):
         job = self.owner.submit(self.first, "mchs", more_survey_ids=[self.second])
         self.assertEqual(self.owner.job(job)["more_survey_ids"], [self.second])
@@ -110,6 +163,9 @@ class SiteJobsTest(unittest.TestCase):
         with self.assertRaises(bathyslam.BathyslamError) as raised:
             self.owner.download_map(job, os.path.join(STUBS, "x.tif"), format="difference", epoch=3)
         self.assertRegex(str(raised.exception), r"epoch: 3 is not a later survey of job \d+ \(2 to 2\)")
+        with self.assertRaises(bathyslam.BathyslamError) as raised:
+            self.owner.download_map(job, os.path.join(STUBS, "x.tif"), format="difference", epoch=2, from_epoch=2)
+        self.assertRegex(str(raised.exception), r"from_epoch: 2 is not an earlier survey of job \d+ \(1 to 1\)")
         with self.assertRaises(bathyslam.BathyslamError) as raised:
             self.owner.download_map(self.single, os.path.join(STUBS, "x.tif"), format="difference")
         self.assertRegex(str(raised.exception), r"format: job \d+ has one survey")

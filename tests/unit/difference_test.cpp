@@ -2,10 +2,12 @@
 // surface shifted as a registration error would shift it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "core/fuse/difference.h"
+#include "core/products/difference_products.h"
 
 namespace bathyslam {
 namespace {
@@ -76,6 +78,20 @@ TEST(Difference, SurfacesThatDoNotMeetCompareNothing) {
   const DifferenceMap d = difference_map(surface(0, 239, 0, 0, false, 1), surface(1000, 239, 0, 0, false, 2));
   EXPECT_EQ(d.cells_compared, 0u);
   EXPECT_TRUE(d.areas.empty());
+}
+
+// Which epochs a site job compares: every pair of a few surveys, and beyond that each survey from
+// the datum and from the one before (20 surveys: 37 maps, not 190).
+TEST(Difference, ASiteComparesEveryPairOfAFewSurveysAndNeighboursBeyond) {
+  EXPECT_TRUE(difference_pairs(1).empty());
+  EXPECT_EQ(difference_pairs(3), (std::vector<std::pair<int, int>>{{0, 1}, {0, 2}, {1, 2}}));
+  EXPECT_EQ(difference_pairs(kAllDifferencesUpTo).size(), 10u);
+  const auto twenty = difference_pairs(20);
+  EXPECT_EQ(twenty.size(), 19u + 18u);
+  for (int k = 1; k < 20; ++k) {
+    EXPECT_NE(std::find(twenty.begin(), twenty.end(), std::pair{0, k}), twenty.end()) << k;
+    EXPECT_NE(std::find(twenty.begin(), twenty.end(), std::pair{k - 1, k}), twenty.end()) << k;
+  }
 }
 
 }  // namespace

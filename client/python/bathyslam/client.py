@@ -9,7 +9,8 @@ import time
 import grpc
 
 from bathyslam.errors import JobFailed, NotFound, Unavailable, error_of
-from bathyslam.v1 import job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, survey_pb2, survey_pb2_grpc
+from bathyslam.v1 import (job_pb2, job_pb2_grpc, map_pb2, map_pb2_grpc, site_pb2, site_pb2_grpc, survey_pb2,
+                          survey_pb2_grpc)
 
 CHUNK = 1 << 20  # the API's largest chunk
 BUNDLE_FILES = ("survey.json", "nav.csv", "pings.csv", "reference_nav.csv")
@@ -24,7 +25,12 @@ def _job(job):
             "state": job_pb2.JobState.Name(job.state).lower(), "stage": job.stage, "progress": job.progress,
             "attempts": job.attempts, "error": job.error, "created_at": job.created_at, "started_at": job.started_at,
             "finished_at": job.finished_at, "parameters": dict(job.parameters),
-            "more_survey_ids": list(job.more_survey_ids)}
+            "more_survey_ids": list(job.more_survey_ids), "site_id": job.site_id}
+
+
+def _site(site):
+    """A Site message as a dict: its surveys in order, the first the datum."""
+    return {"id": site.id, "name": site.name, "survey_ids": list(site.survey_ids), "created_at": site.created_at}
 
 
 def _sha256(path):
@@ -49,6 +55,7 @@ class Client:
         self._surveys = survey_pb2_grpc.SurveyServiceStub(self._channel)
         self._jobs = job_pb2_grpc.JobServiceStub(self._channel)
         self._maps = map_pb2_grpc.MapServiceStub(self._channel)
+        self._sites = site_pb2_grpc.SiteServiceStub(self._channel)
 
     def close(self):
         self._channel.close()
@@ -160,13 +167,29 @@ class Client:
 
     # Jobs
 
-    def submit(self, survey_id, config="mchs", parameters=None, more_survey_ids=()):
+    def submit(self, survey_id=0, config="mchs", parameters=None, more_survey_ids=(), *, site_id=0,
+               reference_survey_id=0):
         """Queues a SLAM job (odometry, gicp or mchs; `parameters` overrides by name); its id.
-        `more_survey_ids`: other surveys of the site, joined with `survey_id` (the datum) in one graph."""
+        `more_survey_ids`: other surveys of the site, joined with `survey_id` (the datum) in one graph;
+        or `site_id`: every survey of a site, in its order. `reference_survey_id`: the datum, when
+        not the first."""
         request = job_pb2.SubmitJobRequest(survey_id=survey_id, configuration=config,
                                            parameters={k: str(v) for k, v in (parameters or {}).items()},
-                                           more_survey_ids=list(more_survey_ids))
+                                           more_survey_ids=list(more_survey_ids), site_id=site_id,
+                                           reference_survey_id=reference_survey_id)
         return self._call("SubmitJob", self._jobs.SubmitJob, request).id
+
+    def create_site(self, name):
+        """A new, empty site of this name; its id."""
+        return self._call("CreateSite", self._sites.CreateSite, site_pb2.CreateSiteRequest(name=name)).id
+
+    def add_surveys(self, site_id, survey_ids):
+        """Appends the surveys to the site in order (all or none); the site as a dict."""
+        return _site(self._call("AddSurveys", self._sites.AddSurveys,
+                                site_pb2.AddSurveysRequest(site_id=site_id, survey_ids=list(survey_ids))))
+
+    def site(self, site_id):
+        return _site(self._call("GetSite", self._sites.GetSite, site_pb2.GetSiteRequest(site_id=site_id)))
 
     def job(self, job_id):
         return _job(self._call("GetJob", self._jobs.GetJob, job_pb2.GetJobRequest(job_id=job_id)))
@@ -197,16 +220,20 @@ class Client:
         reply = self._call("GetReport", self._jobs.GetReport, job_pb2.GetReportRequest(job_id=job_id))
         return json.loads(reply.report_json)
 
-    def download_map(self, job_id, path, format="cog", epoch=2):
+    def download_map(self, job_id, path, format="cog", epoch=None, from_epoch=1):
         """Writes the job's map to `path`: "cog" (GeoTIFF), "bag", "gsf" (the pings with the
-        corrected navigation) or "difference" (a job of several surveys: the change from the first
-        to survey `epoch`, 2 to N); written to a temporary name first, so `path` is whole or absent."""
+        corrected navigation; in a job of several surveys survey `epoch`'s, 1 to N, the first by
+        default) or "difference" (a job of several surveys: the change from survey `from_epoch`, the
+        first by default, to survey `epoch`, 2 by default); written to a temporary name first, so `path` is whole or absent."""
+        if epoch is None:
+            epoch = 2 if format == "difference" else 0
         if format not in FORMATS:
             raise ValueError(f"download_map: format must be one of {sorted(FORMATS)}, not {format!r}")
         partial = path + ".part"
         try:
             with open(partial, "wb") as out:
-                for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format], epoch=epoch),
+                for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format], epoch=epoch,
+                                                                     from_epoch=from_epoch),
                                                timeout=3600, metadata=self._metadata):
                     out.write(chunk.data)
         except BaseException as error:  # a refusal, a full disk, Ctrl-C: no half file stays
