@@ -113,7 +113,8 @@ void run_map(const MapOptions& o) {
                      : o.map_format == "gsf"        ? v1::GSF
                      : o.map_format == "difference" ? v1::DIFFERENCE
                                                     : v1::COG);
-  request.set_epoch(o.epoch == 0 && o.map_format == "difference" ? 2 : o.epoch);
+  if (o.map_format == "gsf") request.set_survey(o.epoch);
+  else request.set_epoch(o.epoch == 0 ? 2 : o.epoch);
   if (!o.epochs.empty()) {
     if (o.epochs.size() != 2 || o.epoch != 0 || o.map_format != "difference")
       throw std::invalid_argument("map: --epochs A,B (two surveys, with --format difference, without --epoch)");

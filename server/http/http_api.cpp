@@ -121,7 +121,8 @@ json job_json(const storage::JobRecord& job) {
             {"created_at", job.created_at},
             {"started_at", job.started_at},
             {"finished_at", job.finished_at},
-            {"more_survey_ids", job.more_survey_ids}};
+            {"more_survey_ids", job.more_survey_ids},
+            {"site_id", job.site_id.value_or(0)}};
   if (job.error) j["error"] = *job.error;
   return j;
 }
@@ -281,7 +282,9 @@ void HttpApi::add_routes() {
     const int size = page_size_of(req);
     std::optional<std::int64_t> survey;
     if (req.has_param("survey_id")) survey = owned_survey(context_, tenant, id_of(req.get_param_value("survey_id"), "survey_id")).id;
-    send_json(res, page_of(context_.jobs.list_jobs(tenant, survey, page_token(req.get_param_value("page_token")), size + 1),
+    std::optional<std::int64_t> site;
+    if (req.has_param("site_id")) site = owned_site(context_, tenant, id_of(req.get_param_value("site_id"), "site_id")).id;
+    send_json(res, page_of(context_.jobs.list_jobs(tenant, survey, page_token(req.get_param_value("page_token")), size + 1, site),
                            size, "jobs", job_json));
   });
   route(R"(/v1/jobs/([0-9]+))", [this](const httplib::Request& req, httplib::Response& res, std::int64_t tenant) {

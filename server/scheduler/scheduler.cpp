@@ -308,6 +308,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     std::vector<std::filesystem::path> gsfs;
     nlohmann::json failed_products = nlohmann::json::array();
     for (std::size_t k = 0; k < survey_ids.size() && input.pings > 0; ++k) {
+      throw_if_cancelled(&cancel);
       const std::filesystem::path path = gsf_dir.path() / corrected_gsf_name(static_cast<int>(k) + 1);
       if (!files[k])  // a database outage here is the job's to retry, not a missing product
         retry_transient(name + ": loading " + names[k], options_.retry, cancel,
@@ -330,6 +331,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const ScratchDir difference_dir(options_.scratch, "difference");
     std::vector<DifferenceProducts> differences;
     for (const auto& [before, after] : difference_pairs(static_cast<int>(survey_ids.size()))) {
+      throw_if_cancelled(&cancel);
       // As the corrected GSF: a difference that cannot be written is reported, the map stands.
       if (auto failure = optional_product(difference_dir.path(), [&] {
             differences.push_back(write_difference_products(result, survey.metadata, input.fuse, before, after,

@@ -103,7 +103,7 @@ std::vector<JobService::NamedSurvey> JobService::requested_surveys(std::int64_t 
     if (site.survey_ids.empty())
       throw Refusal(grpc::StatusCode::FAILED_PRECONDITION,
                     "site_id: site " + std::to_string(site.id) + " has no surveys; add some first (AddSurveys)");
-    for (std::int64_t id : site.survey_ids) surveys.push_back({id, "site_id: survey " + std::to_string(id)});
+    for (std::int64_t id : site.survey_ids) surveys.push_back({id, "site_id"});
   } else {
     if (request.more_survey_ids_size() > kMaxSiteSurveys - 1)
       throw invalid("more_survey_ids", std::to_string(request.more_survey_ids_size()) + " surveys; a job joins at most " +

@@ -176,12 +176,12 @@ grpc::Status MapService::GetMap(grpc::ServerContext* call, const v1::GetMapReque
       return;
     }
     if (format.empty()) {
-      // A job of several surveys has one corrected GSF per survey: epoch 1 (or 0) the first's.
+      // A job of several surveys has one corrected GSF per survey: survey 1 (or 0) the first's.
       const int last = 1 + static_cast<int>(job.more_survey_ids.size());
-      if (request->epoch() < 0 || request->epoch() > last)
-        throw invalid("epoch", std::to_string(request->epoch()) + " is not a survey of job " + std::to_string(job.id) +
-                                   " (1 to " + std::to_string(last) + ")");
-      const std::string name = corrected_gsf_name(request->epoch());
+      if (request->survey() < 0 || request->survey() > last)
+        throw invalid("survey", std::to_string(request->survey()) + " is not a survey of job " + std::to_string(job.id) +
+                                    " (1 to " + std::to_string(last) + ")");
+      const std::string name = corrected_gsf_name(request->survey());
       const auto size = context_.results.file_size(job.id, name);
       if (!size) throw Refusal(grpc::StatusCode::NOT_FOUND, "job " + std::to_string(job.id) + " has no " + name);
       stream_file(call, context_, job.id, name, *size, writer);

@@ -22,6 +22,8 @@ Refusal refusal(const storage::SiteChangeRefused& refused, const std::string& fi
   switch (refused.kind()) {
     case Kind::kNameTaken: return Refusal(grpc::StatusCode::ALREADY_EXISTS, refused.what());
     case Kind::kFull: return Refusal(grpc::StatusCode::FAILED_PRECONDITION, field + ": " + refused.what());
+    case Kind::kGone: return Refusal(grpc::StatusCode::NOT_FOUND, field + ": " + refused.what());
+    case Kind::kCrs:
     case Kind::kMember:
     case Kind::kNotMember: break;
   }
@@ -29,18 +31,30 @@ Refusal refusal(const storage::SiteChangeRefused& refused, const std::string& fi
 }
 
 // The request's survey ids, each the caller's (NOT_FOUND naming survey_ids[k] otherwise, as for
-// any id) and named once; `crs`: the CRS they must share with the site's surveys ("" for any).
-std::vector<std::int64_t> owned_surveys(ServiceContext& context, std::int64_t tenant,
-                                        const google::protobuf::RepeatedField<std::int64_t>& ids, std::string crs) {
+// any id), named once, and in the site's CRS when `crs` is given; `site`: the site they join
+// (none may be in it yet) or leave (each must be).
+enum class Change { kAdd, kRemove };
+std::vector<std::int64_t> named_surveys(ServiceContext& context, std::int64_t tenant, const storage::SiteRecord& site,
+                                        const google::protobuf::RepeatedField<std::int64_t>& ids, Change change,
+                                        std::string crs = "") {
   if (ids.empty()) throw invalid("survey_ids", "name at least one survey");
   if (ids.size() > kMaxSiteSurveys)
     throw invalid("survey_ids", std::to_string(ids.size()) + " surveys; a site holds at most " + std::to_string(kMaxSiteSurveys));
   std::vector<std::int64_t> surveys;
   for (int k = 0; k < ids.size(); ++k) {
     const std::string field = "survey_ids[" + std::to_string(k) + "]";
+    const std::string site_name = "site " + std::to_string(site.id);
+    const bool member = std::find(site.survey_ids.begin(), site.survey_ids.end(), ids[k]) != site.survey_ids.end();
+    if (std::find(surveys.begin(), surveys.end(), ids[k]) != surveys.end())
+      throw invalid(field, "survey " + std::to_string(ids[k]) + " is named twice");
+    if (change == Change::kRemove) {
+      // Only the site's own surveys: an id that is not one says nothing about whose it is.
+      if (!member) throw invalid(field, "survey " + std::to_string(ids[k]) + " is not in " + site_name);
+      surveys.push_back(ids[k]);
+      continue;
+    }
     const storage::SurveyRecord survey = owned_survey(context, tenant, ids[k], field);
-    if (std::find(surveys.begin(), surveys.end(), survey.id) != surveys.end())
-      throw invalid(field, "survey " + std::to_string(survey.id) + " is named twice");
+    if (member) throw invalid(field, "survey " + std::to_string(survey.id) + " is in " + site_name + " already");
     // A survey whose CRS is not declared yet takes survey.json's at finalize; SubmitJob checks again.
     if (!survey.crs.empty() && !crs.empty() && survey.crs != crs)
       throw invalid(field, "survey " + std::to_string(survey.id) + " is in " + survey.crs + ", the site in " + crs +
@@ -49,6 +63,13 @@ std::vector<std::int64_t> owned_surveys(ServiceContext& context, std::int64_t te
     surveys.push_back(survey.id);
   }
   return surveys;
+}
+
+// The site as it is now; NOT_FOUND if a concurrent call deleted it.
+storage::SiteRecord site_now(ServiceContext& context, std::int64_t site_id) {
+  auto site = context.sites.site(site_id);
+  if (!site) throw Refusal(grpc::StatusCode::NOT_FOUND, "site_id: no site " + std::to_string(site_id));
+  return *site;
 }
 
 // The CRS of the site's surveys: the first one's that declares one ("" when none does yet).
@@ -76,7 +97,7 @@ grpc::Status SiteService::CreateSite(grpc::ServerContext* call, const v1::Create
       throw refusal(refused, "name");
     }
     log("site %lld created: %s", static_cast<long long>(id), quoted_input(request->name()).c_str());
-    describe(*context_.sites.site(id), reply);
+    describe(site_now(context_, id), reply);
   });
 }
 
@@ -84,27 +105,29 @@ grpc::Status SiteService::AddSurveys(grpc::ServerContext* call, const v1::AddSur
   return handle("AddSurveys", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
     const storage::SiteRecord site = owned_site(context_, tenant, request->site_id());
-    const std::vector<std::int64_t> surveys = owned_surveys(context_, tenant, request->survey_ids(), site_crs(context_, site));
+    const std::vector<std::int64_t> surveys =
+        named_surveys(context_, tenant, site, request->survey_ids(), Change::kAdd, site_crs(context_, site));
     try {
       context_.sites.add_surveys(site.id, surveys, kMaxSiteSurveys);
     } catch (const storage::SiteChangeRefused& refused) {
-      throw refusal(refused, "survey_ids");
+      throw refusal(refused, refused.kind() == storage::SiteChangeRefused::Kind::kGone ? "site_id" : "survey_ids");
     }
-    describe(*context_.sites.site(site.id), reply);
+    describe(site_now(context_, site.id), reply);
   });
 }
 
 grpc::Status SiteService::RemoveSurveys(grpc::ServerContext* call, const v1::RemoveSurveysRequest* request,
                                         v1::Site* reply) {
   return handle("RemoveSurveys", call, [&] {
-    const storage::SiteRecord site = owned_site(context_, caller_tenant(context_, *call), request->site_id());
-    if (request->survey_ids().empty()) throw invalid("survey_ids", "name at least one survey");
+    const std::int64_t tenant = caller_tenant(context_, *call);
+    const storage::SiteRecord site = owned_site(context_, tenant, request->site_id());
+    const std::vector<std::int64_t> surveys = named_surveys(context_, tenant, site, request->survey_ids(), Change::kRemove);
     try {
-      context_.sites.remove_surveys(site.id, {request->survey_ids().begin(), request->survey_ids().end()});
+      context_.sites.remove_surveys(site.id, surveys);
     } catch (const storage::SiteChangeRefused& refused) {
-      throw refusal(refused, "survey_ids");
+      throw refusal(refused, refused.kind() == storage::SiteChangeRefused::Kind::kGone ? "site_id" : "survey_ids");
     }
-    describe(*context_.sites.site(site.id), reply);
+    describe(site_now(context_, site.id), reply);
   });
 }
 

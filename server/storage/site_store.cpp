@@ -24,9 +24,11 @@ std::vector<SiteRecord> site_records(const Result& rows) {
   return sites;
 }
 
-// The site's surveys, read under a lock on the site's row that every change takes first.
+// The site's surveys, read under a lock on the site's row that every change takes first (NO KEY:
+// a job inserted for the site meanwhile need not wait).
 std::vector<std::int64_t> lock_members(Connection& connection, std::int64_t site_id) {
-  connection.exec("SELECT 1 FROM sites WHERE id = $1 FOR UPDATE", {site_id});
+  if (connection.exec("SELECT 1 FROM sites WHERE id = $1 FOR NO KEY UPDATE", {site_id}).rows() == 0)
+    throw SiteChangeRefused(SiteChangeRefused::Kind::kGone, "site " + std::to_string(site_id) + " was deleted meanwhile");
   Result rows = connection.exec("SELECT survey_id FROM site_surveys WHERE site_id = $1 ORDER BY position", {site_id});
   std::vector<std::int64_t> ids;
   for (int row = 0; row < rows.rows(); ++row) ids.push_back(rows.int64(row, "survey_id"));
@@ -79,12 +81,28 @@ void SiteStore::add_surveys(std::int64_t site_id, const std::vector<std::int64_t
     throw SiteChangeRefused(SiteChangeRefused::Kind::kFull,
                             "site " + std::to_string(site_id) + " would hold " + std::to_string(members.size()) +
                                 " surveys; a site holds at most " + std::to_string(max_surveys) + " (what one job joins)");
+  // The CRSs the site would hold, decided under the lock (the service checked before it, but a
+  // concurrent add may have come first). A survey that declares none yet is checked at submit.
+  std::string ids;
+  for (std::int64_t id : members) ids += (ids.empty() ? "" : ",") + std::to_string(id);
+  const Result crs = connection->exec(
+      "SELECT DISTINCT crs FROM surveys WHERE id = ANY($1::bigint[]) AND crs <> '' ORDER BY crs", {"{" + ids + "}"});
+  if (crs.rows() > 1)
+    throw SiteChangeRefused(SiteChangeRefused::Kind::kCrs, "the site would hold surveys in " + std::string(crs.text(0, "crs")) +
+                                                               " and " + std::string(crs.text(1, "crs")) +
+                                                               ": surveys of one site share a CRS");
   const std::int64_t next =
       connection->exec("SELECT coalesce(max(position) + 1, 0) AS next FROM site_surveys WHERE site_id = $1", {site_id})
           .int64(0, "next");
-  for (std::size_t k = 0; k < survey_ids.size(); ++k)
-    connection->exec("INSERT INTO site_surveys (site_id, position, survey_id) VALUES ($1, $2, $3)",
-                     {site_id, next + static_cast<std::int64_t>(k), survey_ids[k]});
+  try {
+    for (std::size_t k = 0; k < survey_ids.size(); ++k)
+      connection->exec("INSERT INTO site_surveys (site_id, position, survey_id) VALUES ($1, $2, $3)",
+                       {site_id, next + static_cast<std::int64_t>(k), survey_ids[k]});
+  } catch (const DatabaseError& error) {
+    if (error.sqlstate() == "23503")  // a foreign key: the survey was deleted since the service looked
+      throw SiteChangeRefused(SiteChangeRefused::Kind::kGone, "a survey was deleted meanwhile");
+    throw;
+  }
   transaction.commit();
 }
 

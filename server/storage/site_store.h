@@ -24,7 +24,7 @@ struct SiteRecord {
 // have added the survey, or filled the site, after the service looked).
 class SiteChangeRefused : public std::runtime_error {
  public:
-  enum class Kind { kNameTaken, kMember, kNotMember, kFull };
+  enum class Kind { kNameTaken, kMember, kNotMember, kFull, kCrs, kGone };
   SiteChangeRefused(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const { return kind_; }
 
@@ -42,10 +42,12 @@ class SiteStore {
   // A tenant's sites by id, after `after_id`, at most `limit`; only `name` when given.
   std::vector<SiteRecord> list_sites(std::int64_t tenant_id, std::int64_t after_id, int limit,
                                      const std::optional<std::string>& name = std::nullopt);
-  // Appends the surveys in order, all or none; refuses one already in the site (kMember) or a
-  // site that would then hold more than `max_surveys` (kFull).
+  // Appends the surveys in order, all or none; refuses one already in the site (kMember), a
+  // site that would then hold more than `max_surveys` (kFull), surveys of two CRSs (kCrs), and a
+  // site or survey deleted meanwhile (kGone).
   void add_surveys(std::int64_t site_id, const std::vector<std::int64_t>& survey_ids, int max_surveys);
-  // Takes the surveys out, all or none; kNotMember names one that is not in the site.
+  // Takes the surveys out, all or none; kNotMember names one that is not in the site, kGone a
+  // site deleted meanwhile.
   void remove_surveys(std::int64_t site_id, const std::vector<std::int64_t>& survey_ids);
   bool delete_site(std::int64_t site_id);
 

@@ -71,7 +71,7 @@ done
 site=$("$BATHYSLAM" site create harbour | awk '/^site/ {print $2}')
 "$BATHYSLAM" site add "$site" "$survey" | grep -q "surveys $survey " || fail "site add"
 if "$BATHYSLAM" site add "$site" "$survey" 2> "$work/twice.err"; then fail "a survey added to a site twice"; fi
-grep -q "INVALID_ARGUMENT: survey_ids: survey $survey is in site $site already" "$work/twice.err" || fail "$(cat "$work/twice.err")"
+grep -q "INVALID_ARGUMENT: survey_ids\[0\]: survey $survey is in site $site already" "$work/twice.err" || fail "$(cat "$work/twice.err")"
 "$BATHYSLAM" site list | grep -Eq "^ +$site +.* harbour +$survey$" || fail "site list: $("$BATHYSLAM" site list)"
 site_job=$("$BATHYSLAM" submit --site "$site" --config odometry | awk '/^job/ {print $2}')
 "$BATHYSLAM" watch "$site_job" > /dev/null 2>&1 || fail "the site's job"

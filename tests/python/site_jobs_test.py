@@ -96,13 +96,19 @@ class SiteJobsTest(unittest.TestCase):
                             rf"name: site {site} is named 'harbour' already")
         self.assertEqual(self.owner.add_surveys(site, [self.first, self.second])["survey_ids"], [self.first, self.second])
         self.assert_refused(lambda: self.owner.add_surveys(site, [self.first]), grpc.StatusCode.INVALID_ARGUMENT,
-                            rf"survey_ids: survey {self.first} is in site {site} already")
+                            rf"survey_ids\[0\]: survey {self.first} is in site {site} already")
         theirs = self.intruder._call("CreateSurvey", self.intruder._surveys.CreateSurvey,
                                      survey_pb2.CreateSurveyRequest(name="their site survey", crs="EPSG:32651")).id
         self.assert_refused(lambda: self.owner.add_surveys(site, [theirs]), grpc.StatusCode.NOT_FOUND,
                             rf"survey_ids\[0\]: no survey {theirs}")
         self.assert_refused(lambda: self.intruder.submit(site_id=site), grpc.StatusCode.NOT_FOUND, rf"site_id: no site {site}")
         self.assert_refused(lambda: self.intruder.site(site), grpc.StatusCode.NOT_FOUND, rf"site_id: no site {site}")
+        remove = lambda ids: self.owner._call("RemoveSurveys", self.owner._sites.RemoveSurveys,  # noqa: E731
+                                              site_pb2.RemoveSurveysRequest(site_id=site, survey_ids=ids))
+        self.assert_refused(lambda: remove([self.second, self.second]), grpc.StatusCode.INVALID_ARGUMENT,
+                            rf"survey_ids\[1\]: survey {self.second} is named twice")
+        self.assert_refused(lambda: remove([theirs]), grpc.StatusCode.INVALID_ARGUMENT,
+                            rf"survey_ids\[0\]: survey {theirs} is not in site {site}")
         self.assert_refused(lambda: self.owner.submit(self.first, site_id=site), grpc.StatusCode.INVALID_ARGUMENT,
                             r"site_id: a job names a site or its surveys")
         self.assert_refused(lambda: self.owner.submit(site_id=site, reference_survey_id=999999),
@@ -115,6 +121,10 @@ class SiteJobsTest(unittest.TestCase):
         self.assertEqual(self.owner.watch(job)["state"], "succeeded")
         listed = self.owner._call("ListJobs", self.owner._jobs.ListJobs, job_pb2.ListJobsRequest(site_id=site)).jobs
         self.assertEqual([j.id for j in listed], [job])
+        connection = self.server.connection()  # and over HTTP
+        connection.request("GET", f"/v1/jobs?site_id={site}", headers={"Authorization": "Bearer " + self.tokens["owner"]})
+        self.assertEqual([(j["id"], j["site_id"]) for j in json.loads(connection.getresponse().read())["jobs"]], [(job, site)])
+        connection.close()
         by_later_survey = self.owner._call("ListJobs", self.owner._jobs.ListJobs, job_pb2.ListJobsRequest(survey_id=self.first))
         self.assertIn(job, [j.id for j in by_later_survey.jobs], "a job is listed under each of its surveys")
         # Each survey's own corrected GSF, its pings at that survey's corrected navigation.
@@ -129,7 +139,7 @@ class SiteJobsTest(unittest.TestCase):
             self.assertLessEqual(abs(pings - expected), 0.01 * expected, path)
         with self.assertRaises(bathyslam.BathyslamError) as raised:
             self.owner.download_map(job, os.path.join(STUBS, "x.gsf"), format="gsf", epoch=3)
-        self.assertRegex(str(raised.exception), r"epoch: 3 is not a survey of job \d+ \(1 to 2\)")
+        self.assertRegex(str(raised.exception), r"survey: 3 is not a survey of job \d+ \(1 to 2\)")
         # Deleting the site leaves its surveys and jobs.
         self.owner._call("DeleteSite", self.owner._sites.DeleteSite, site_pb2.DeleteSiteRequest(site_id=site))
         self.assertEqual(self.owner.job(job)["site_id"], 0)

@@ -225,15 +225,15 @@ class Client:
         corrected navigation; in a job of several surveys survey `epoch`'s, 1 to N, the first by
         default) or "difference" (a job of several surveys: the change from survey `from_epoch`, the
         first by default, to survey `epoch`, 2 by default); written to a temporary name first, so `path` is whole or absent."""
-        if epoch is None:
-            epoch = 2 if format == "difference" else 0
+        survey = (epoch or 0) if format == "gsf" else 0
+        epoch = (epoch or 2) if format == "difference" else 0
         if format not in FORMATS:
             raise ValueError(f"download_map: format must be one of {sorted(FORMATS)}, not {format!r}")
         partial = path + ".part"
         try:
             with open(partial, "wb") as out:
                 for chunk in self._maps.GetMap(map_pb2.GetMapRequest(job_id=job_id, format=FORMATS[format], epoch=epoch,
-                                                                     from_epoch=from_epoch),
+                                                                     from_epoch=from_epoch, survey=survey),
                                                timeout=3600, metadata=self._metadata):
                     out.write(chunk.data)
         except BaseException as error:  # a refusal, a full disk, Ctrl-C: no half file stays
