@@ -12,23 +12,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 bundle=$(realpath "$1")
 build=$(realpath "${2:-$root/build}")
 runs=${3:-3}
-work=$(mktemp -d /tmp/bathyslam-ingest.XXXXXX)
-pg="$work/pg"
-server_pid=""
-cleanup() {
-  [ -z "$server_pid" ] || { kill "$server_pid" 2> /dev/null || true; wait "$server_pid" 2> /dev/null || true; }
-  bash "$root/scripts/pg.sh" destroy "$pg" > /dev/null 2>&1 || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
-bash "$root/scripts/pg.sh" start "$pg" > /dev/null
-url=$(bash "$root/scripts/pg.sh" url "$pg")
-"$build/server/bathyslam-server" --db "$url" --migrate --listen 127.0.0.1:0 --workers 1 --dev-tenant bench \
-  > "$work/server.out" 2> "$work/server.log" &
-server_pid=$!
-for _ in $(seq 100); do grep -q "listening" "$work/server.out" && break; sleep 0.1; done
-export BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$work/server.out")
-[ -n "$BATHYSLAM_SERVER" ] || { cat "$work/server.log" >&2; exit 1; }
+source "$root/bench/private_server.sh"
+start_private_server --workers 1 --dev-tenant bench
 
 file="$bundle/pings.csv"
 bytes=$(stat -c %s "$file")

@@ -141,6 +141,11 @@ struct ServeOptions {
   int statement_timeout_seconds = 60;
   std::string tls_cert, tls_key, tls_client_ca;  // PEM files; no certificate: plaintext
   std::string http;  // HOST:PORT of the HTTP endpoint; empty: none
+  // gRPC's threads: each call in progress holds one (a WatchJob or upload stream for its whole
+  // life, up to 64 + 8 + 2 a tenant); a burst of 4,000 refused WatchJob calls made 1,928 under a
+  // bound of 2,048 (bench/fairness.sh, docs/service.md). Past the bound a call is refused
+  // RESOURCE_EXHAUSTED, so threads and memory stay bounded whatever the clients do.
+  int max_threads = 512;
   service::Limits limits;
 };
 
@@ -230,6 +235,9 @@ int serve(const ServeOptions& o) {
   builder.RegisterService(&map_service);
   builder.RegisterService(&site_service);
   builder.SetMaxReceiveMessageSize(2 << 20);  // a 1 MiB chunk and its envelope
+  grpc::ResourceQuota quota("bathyslam-server");
+  quota.SetMaxThreads(o.max_threads);
+  builder.SetResourceQuota(quota);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
     std::fprintf(stderr, "bathyslam-server: cannot listen on %s\n", o.listen.c_str());
@@ -319,6 +327,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-http-requests", o.limits.max_http_requests,
                  "HTTP requests in progress per tenant on this server (a download or event stream until its end)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-threads", o.max_threads,
+                 "gRPC threads, one per call in progress; calls beyond are refused (RESOURCE_EXHAUSTED)")
+      ->capture_default_str()->check(CLI::Range(16, 1 << 16));
   app.add_option("--max-attempts", o.limits.max_attempts, "runs of a job whose worker died")
       ->capture_default_str()->check(CLI::Range(1, 10));
   CLI::App* migrate = app.add_subcommand("migrate", "apply pending schema migrations and exit");

@@ -68,6 +68,9 @@ bool parse_field(std::string_view text, T& value, std::string_view file, std::si
 constexpr double kMaxProjectedCoordinate_m = 1e8;
 // Deeper than the deepest ocean (10.9 km), or higher than any vehicle with a multibeam flies.
 constexpr double kMaxVehicleDepth_m = 12000;
+// Soundings of one ping: what GSF's 2-byte beam count holds (the corrected GSF of every job), and
+// tens of times what any multibeam forms (an EM2040 dual swath: 1,600).
+constexpr std::size_t kMaxBeamsPerPing = 65535;
 
 bool check_field_count(std::size_t count, std::size_t expected, std::string_view file,
                        std::size_t line, ProblemList& problems) {
@@ -248,6 +251,15 @@ void stream_pings_csv(ByteSource& source, std::string_view file, const std::opti
                      "beam " + std::to_string(beam.index) + " follows beam " +
                          std::to_string(ping_beams.back().index) +
                          " in the same ping; beams must increase within a ping");
+      continue;
+    }
+    if (ping_beams.size() >= kMaxBeamsPerPing) {
+      if (ping_beams.size() == kMaxBeamsPerPing) {  // said once per ping, at its first beam too many
+        problems.error(std::string(file), n, "beam",
+                       "the ping at time " + time_text + " has more than " + std::to_string(kMaxBeamsPerPing) +
+                           " beams (a GSF ping's limit; no multibeam forms that many)");
+        ping_beams.push_back(beam);
+      }
       continue;
     }
     if (soundings >= std::numeric_limits<uint32_t>::max()) {

@@ -255,6 +255,8 @@ class HostileInputTableTest(unittest.TestCase):
             ("pings.csv with a line over 64 KiB", {"pings.csv": pings + b"1720000005.5,1,0,1," + b"9" * (70 << 10) + b"\n"},
              r"[\s\S]*pings\.csv:222"),
             ("pings.csv missing a column", {"pings.csv": pings.replace(b",down", b"", 1)}, r"[\s\S]*pings\.csv"),
+            ("a ping of 70 000 beams", {"pings.csv": pings + "".join(f"1720000019.75,{b},0,1,20\n" for b in range(70000)).encode()},
+             r"[\s\S]*pings\.csv:65757: beam: the ping at time 1720000019.75 has more than 65535 beams"),
             ("pings.csv left out", {"pings.csv": None}, r"[\s\S]*pings\.csv"),
             ("nav.csv left out", {"nav.csv": None}, r"[\s\S]*nav\.csv"),
             ("survey.json not JSON", {"survey.json": b"{name: tiny"}, r"[\s\S]*survey\.json"),
