@@ -64,6 +64,26 @@ std::int64_t tenant_named(storage::ConnectionPool& pool, storage::SurveyStore& s
   return surveys.create_tenant(name);
 }
 
+struct QuotaOptions {
+  std::string tenant;
+  std::int64_t bytes = -1;  // -1: the option left out
+  bool none = false;
+};
+
+// `tenant quota`: sets the tenant's storage quota (or removes it), then shows its use; without
+// --bytes or --none only shows it.
+int tenant_quota(const std::string& db, const QuotaOptions& q) {
+  storage::ConnectionPool pool(db, 1);
+  storage::SurveyStore surveys(pool);
+  const std::int64_t tenant = tenant_named(pool, surveys, q.tenant);
+  if (q.none) surveys.set_quota(tenant, std::nullopt);
+  else if (q.bytes >= 0) surveys.set_quota(tenant, q.bytes);
+  const storage::StorageUse use = surveys.storage_use(tenant);
+  std::printf("tenant %s: %lld bytes stored, quota %s\n", q.tenant.c_str(), static_cast<long long>(use.stored_bytes),
+              use.quota_bytes ? (std::to_string(*use.quota_bytes) + " bytes").c_str() : "none");
+  return 0;
+}
+
 struct TokenOptions {
   std::string tenant, description, token;
   std::int64_t id = 0;
@@ -354,6 +374,14 @@ int main(int argc, char** argv) {
   CLI::App* list = token->add_subcommand("list", "every token (never the secret), or a tenant's");
   add_db_option(list);
   list->add_option("--tenant", t.tenant, "only this tenant's");
+  CLI::App* tenant = app.add_subcommand("tenant", "tenants: quota (storage)");
+  tenant->require_subcommand(1);
+  QuotaOptions q;
+  CLI::App* quota = tenant->add_subcommand("quota", "show a tenant's storage, or set its quota: the bytes its uploads may hold");
+  add_db_option(quota);
+  quota->add_option("--tenant", q.tenant, "tenant name (created if needed)")->required();
+  auto* bytes = quota->add_option("--bytes", q.bytes, "the quota in bytes")->check(CLI::NonNegativeNumber);
+  quota->add_flag("--none", q.none, "no quota")->excludes(bytes);
   CLI11_PARSE(app, argc, argv);
   if (o.db.empty()) {
     std::fprintf(stderr, "bathyslam-server: no database; pass --db or set BATHYSLAM_DB\n");
@@ -365,6 +393,7 @@ int main(int argc, char** argv) {
       storage::Connection connection(o.db);
       storage::ensure_schema(connection, o.migrate);
     }
+    if (*quota) return tenant_quota(o.db, q);
     if (*revoke) return revoke_token(o.db, t);
     if (*list) return list_tokens(o.db, t);
     if (*token) return create_token(o.db, t);

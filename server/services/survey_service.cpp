@@ -50,7 +50,8 @@ Refusal upload_refusal(const storage::UploadError& error) {
     case Kind::kFinalized:
     case Kind::kConflict: return Refusal(grpc::StatusCode::FAILED_PRECONDITION, error.what());
     case Kind::kBadOffset: return Refusal(grpc::StatusCode::ABORTED, error.what());
-    case Kind::kTooMany: return Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, error.what());
+    case Kind::kTooMany:
+    case Kind::kQuota: return Refusal(grpc::StatusCode::RESOURCE_EXHAUSTED, error.what());
     case Kind::kChecksum:
     case Kind::kInvalid: break;
   }
@@ -306,6 +307,9 @@ grpc::Status SurveyService::ListSurveys(grpc::ServerContext* call, const v1::Lis
     const bool more = trim_to_page(surveys, size);
     for (const storage::SurveyRecord& survey : surveys) describe(survey, false, reply->add_surveys());
     if (more) reply->set_next_page_token(std::to_string(surveys.back().id));
+    const storage::StorageUse use = context_.surveys.storage_use(tenant);
+    reply->set_stored_bytes(use.stored_bytes);
+    reply->set_quota_bytes(use.quota_bytes.value_or(-1));
   });
 }
 

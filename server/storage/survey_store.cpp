@@ -343,6 +343,49 @@ std::vector<SurveyRecord> SurveyStore::list_surveys(std::int64_t tenant_id, std:
                                          {tenant_id, after_id, limit, name}));
 }
 
+namespace {
+
+// What the tenant's files declare in all, and its quota, on a connection the caller may hold in
+// a transaction.
+StorageUse storage_use_on(Connection& connection, std::int64_t tenant_id) {
+  Result row = connection.exec(
+      "SELECT t.quota_bytes, (SELECT coalesce(sum(f.size_bytes), 0) FROM survey_files f JOIN surveys s ON s.id = f.survey_id"
+      " WHERE s.tenant_id = t.id)::bigint AS stored FROM tenants t WHERE t.id = $1",
+      {tenant_id});
+  if (row.rows() == 0) throw std::out_of_range("no tenant " + std::to_string(tenant_id));
+  return {row.int64(0, "stored"), row.optional_int64(0, "quota_bytes")};
+}
+
+// Refuses a declaration of `size_bytes` more that would pass the tenant's quota. Under a lock on
+// the tenant's row (NO KEY: a survey created meanwhile need not wait), so that concurrent
+// declarations are counted one after the other.
+void check_quota(Connection& connection, std::int64_t survey_id, std::int64_t size_bytes) {
+  const std::int64_t tenant =
+      connection
+          .exec("SELECT t.id FROM tenants t JOIN surveys s ON s.tenant_id = t.id WHERE s.id = $1 FOR NO KEY UPDATE OF t",
+                {survey_id})
+          .int64(0, "id");
+  const StorageUse use = storage_use_on(connection, tenant);
+  if (use.quota_bytes && use.stored_bytes + size_bytes > *use.quota_bytes)
+    throw UploadError(UploadError::Kind::kQuota,
+                      "size_bytes: " + std::to_string(size_bytes) + " more bytes would take this tenant's files to " +
+                          std::to_string(use.stored_bytes + size_bytes) + " bytes, over its quota of " +
+                          std::to_string(*use.quota_bytes) + "; delete surveys or ask the operator for more");
+}
+
+}  // namespace
+
+void SurveyStore::set_quota(std::int64_t tenant_id, std::optional<std::int64_t> quota_bytes) {
+  auto connection = pool_.acquire();
+  if (connection->exec("UPDATE tenants SET quota_bytes = $2 WHERE id = $1", {tenant_id, quota_bytes}).affected() != 1)
+    throw std::out_of_range("no tenant " + std::to_string(tenant_id));
+}
+
+StorageUse SurveyStore::storage_use(std::int64_t tenant_id) {
+  auto connection = pool_.acquire();
+  return storage_use_on(*connection, tenant_id);
+}
+
 UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string& name, std::int64_t size_bytes,
                                       const Sha256& digest) {
   if (!plain_file_name(name))
@@ -372,6 +415,7 @@ UploadState SurveyStore::begin_upload(std::int64_t survey_id, const std::string&
     throw UploadError(UploadError::Kind::kTooMany, "file_name: survey " + std::to_string(survey_id) + " holds " +
                                                        std::to_string(files) + " files, the most a survey may hold");
   }
+  check_quota(*connection, survey_id, size_bytes);  // a changed declaration's old row is gone by now
   Result created = connection->exec(
       "INSERT INTO survey_files (survey_id, name, size_bytes, sha256, chunk_count, committed_bytes, complete)"
       " VALUES ($1, $2, $3, $4, 0, 0, false) RETURNING name, size_bytes, committed_bytes, complete, sha256",

@@ -64,7 +64,7 @@ inline constexpr std::int64_t kMaxFilesPerSurvey = 1000;
 
 class UploadError : public std::runtime_error {
  public:
-  enum class Kind { kNotFound, kFinalized, kConflict, kBadOffset, kChecksum, kInvalid, kTooMany };
+  enum class Kind { kNotFound, kFinalized, kConflict, kBadOffset, kChecksum, kInvalid, kTooMany, kQuota };
   UploadError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const { return kind_; }
 
@@ -83,6 +83,12 @@ struct Validation {
   bool valid = false;
   nlohmann::json problems = nlohmann::json::array();
   nlohmann::json summary;  // null when the bundle did not parse
+};
+
+// What a tenant's uploaded files declare in all, and its quota (nullopt: none).
+struct StorageUse {
+  std::int64_t stored_bytes = 0;
+  std::optional<std::int64_t> quota_bytes;
 };
 
 // An issued token as an operator lists it: never the token itself, which only its holder has.
@@ -122,6 +128,10 @@ class SurveyStore {
   bool revoke_token(std::int64_t token_id);  // by the id that list_tokens shows
   // Every token, or a tenant's, oldest first.
   std::vector<TokenInfo> list_tokens(const std::optional<std::string>& tenant = std::nullopt);
+  // The bytes a tenant's uploaded files may declare in all (nullopt: no quota). A declaration
+  // that would pass it is refused (UploadError kQuota); what is stored already stays.
+  void set_quota(std::int64_t tenant_id, std::optional<std::int64_t> quota_bytes);
+  StorageUse storage_use(std::int64_t tenant_id);
 
   // The survey and all its files in one transaction: a failure anywhere leaves nothing.
   // Throws std::invalid_argument for a bad name before touching the database.
@@ -139,6 +149,7 @@ class SurveyStore {
 
   // Resumable uploads (UploadError on refusal). begin_upload declares a file; declaring it
   // again with the same size and SHA-256 keeps what is committed, with another it starts over.
+  // A declaration that would take the tenant's files past its quota is refused (kQuota).
   UploadState begin_upload(std::int64_t survey_id, const std::string& name, std::int64_t size_bytes,
                            const Sha256& digest);
   // Stores `data` at `offset`, which must be the committed size. When the file is then whole,

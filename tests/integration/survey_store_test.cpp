@@ -115,6 +115,42 @@ TEST(SurveyStore, ASurveyHoldsAtMostItsLimitOfFiles) {
   EXPECT_EQ(files(), kMaxFilesPerSurvey);
 }
 
+// A tenant's quota counts what every survey's files declare; a declaration past it is refused and
+// changes nothing; a resumed declaration is not counted twice; other tenants are not counted.
+TEST(SurveyStore, ADeclarationPastTheTenantsQuotaIsRefused) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool);
+  const std::int64_t acme = store.create_tenant("acme");
+  const std::int64_t other = store.create_tenant("other");
+  const std::int64_t first = store.create_survey(acme, "first", "", nlohmann::json::object(), nlohmann::json::object());
+  const std::int64_t second = store.create_survey(acme, "second", "", nlohmann::json::object(), nlohmann::json::object());
+  store.begin_upload(store.create_survey(other, "theirs", "", nlohmann::json::object(), nlohmann::json::object()), "pings.csv", 5000, sha256(bytes_of("x")));
+  EXPECT_EQ(store.storage_use(acme).quota_bytes, std::nullopt);
+  store.set_quota(acme, 1000);
+  store.begin_upload(first, "nav.csv", 600, sha256(bytes_of("a")));
+  store.begin_upload(first, "nav.csv", 600, sha256(bytes_of("a")));  // resumed: still 600
+  const long long rows = rows_under_surveys(db);
+  try {
+    store.begin_upload(second, "pings.csv", 500, sha256(bytes_of("b")));
+    FAIL() << "a declaration past the quota was taken";
+  } catch (const UploadError& error) {
+    EXPECT_EQ(error.kind(), UploadError::Kind::kQuota);
+    EXPECT_STREQ(error.what(), "size_bytes: 500 more bytes would take this tenant's files to 1100 bytes, over its quota of "
+                               "1000; delete surveys or ask the operator for more");
+  }
+  // A changed declaration of a file past the quota leaves the old one in place.
+  EXPECT_THROW(store.begin_upload(first, "nav.csv", 1001, sha256(bytes_of("c"))), UploadError);
+  EXPECT_EQ(rows_under_surveys(db), rows);
+  EXPECT_EQ(store.upload_state(first, "nav.csv")->size_bytes, 600);
+  store.begin_upload(second, "pings.csv", 400, sha256(bytes_of("b")));  // exactly the quota
+  EXPECT_EQ(store.storage_use(acme).stored_bytes, 1000);
+  EXPECT_EQ(store.storage_use(acme).quota_bytes, 1000);
+  store.set_quota(acme, std::nullopt);
+  store.begin_upload(second, "survey.json", 10'000, sha256(bytes_of("d")));
+  EXPECT_EQ(store.storage_use(acme).stored_bytes, 11'000);
+}
+
 TEST(SurveyStore, TokensAreStoredHashedAndCanBeRevoked) {
   testing::FreshDatabase db;
   ConnectionPool pool(db.conninfo(), 1);

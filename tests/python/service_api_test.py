@@ -216,6 +216,31 @@ class ServiceApiTest(unittest.TestCase):
         self.assertEqual(raised.exception.code(), code, raised.exception.details())
         return raised.exception.details()
 
+    def test_a_tenants_uploads_are_bounded_by_its_quota(self):
+        """The operator's quota: ListSurveys shows the use; a file past it is refused naming the
+        field, and nothing changes; without a quota it uploads."""
+        quota = lambda *args: subprocess.run([ENV["BATHYSLAM_SERVER_BIN"], "tenant", "quota", "--db", self.server.url,  # noqa: E731
+                                              "--tenant", "python", *args], check=True, text=True, capture_output=True).stdout
+        survey_id = self.create("quota")
+        stored = self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(), timeout=30).stored_bytes
+        self.assertIn(f"tenant python: {stored} bytes stored, quota {stored + 100} bytes", quota("--bytes", str(stored + 100)))
+        try:
+            listed = self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(), timeout=30)
+            self.assertEqual((listed.stored_bytes, listed.quota_bytes), (stored, stored + 100))
+            before = database_fingerprint(self.server.url)
+            with self.assertRaises(grpc.RpcError) as raised:
+                self.upload(survey_id, "nav.csv", b"x" * 101)
+            self.assertEqual(raised.exception.code(), grpc.StatusCode.RESOURCE_EXHAUSTED)
+            self.assertRegex(raised.exception.details(), rf"^size_bytes: 101 more bytes would take this tenant's files to "
+                                                         rf"{stored + 101} bytes, over its quota of {stored + 100}")
+            self.assertEqual(database_fingerprint(self.server.url), before)
+            self.assertTrue(self.upload(survey_id, "nav.csv", b"x" * 100).complete)  # exactly the quota
+        finally:
+            self.assertIn("quota none", quota("--none"))
+        self.assertEqual(self.surveys.ListSurveys(survey_pb2.ListSurveysRequest(), timeout=30).quota_bytes, -1)
+        self.assertTrue(self.upload(survey_id, "pings.csv", b"y" * 1000).complete)
+        self.surveys.DeleteSurvey(survey_pb2.DeleteSurveyRequest(survey_id=survey_id), timeout=30)
+
     def test_health_serving(self):
         reply = self.server.health.Check(health_pb2.HealthCheckRequest(service=""), timeout=10)
         self.assertEqual(reply.status, health_pb2.HealthCheckResponse.SERVING)
