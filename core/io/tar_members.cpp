@@ -65,12 +65,18 @@ bool all_zero(const Header& header) {
 
 std::vector<TarMember> tar_members(const std::filesystem::path& tar) {
   std::ifstream in(tar, std::ios::binary);
+  std::error_code error;
+  const std::uint64_t length = std::filesystem::file_size(tar, error);
   std::vector<TarMember> members;
   std::string long_name, long_link;  // from GNU 'L'/'K' or pax 'x' headers, for the next member
   Header header;
   while (in.read(header.data(), kBlock) && !all_zero(header)) {
     const char type = header[156];
     const std::uint64_t size = member_size(header);
+    // A member that runs past the file's end ends the walk: its size, rounded up, could wrap and
+    // seek back to this header again, forever (found by fuzzing: a base-256 size of 2^64 - 1).
+    const std::uint64_t here = static_cast<std::uint64_t>(in.tellg());
+    if (error || size > length || (size + kBlock - 1) / kBlock * kBlock > length - here) break;
     const std::uint64_t padded = (size + kBlock - 1) / kBlock * kBlock;
     if (type == 'L' || type == 'K' || type == 'x') {
       std::string data(static_cast<std::size_t>(std::min<std::uint64_t>(size, 1 << 20)), '\0');

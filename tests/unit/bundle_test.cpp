@@ -292,6 +292,23 @@ TEST_F(TarBundleTest, LongNamesAndLinksAreReadInEveryFormat) {
   }
 }
 
+// A header whose size runs past the file's end ends the walk. Here GNU's base-256 form of
+// 2^64 - 512: rounded up to whole blocks it was a seek of -512 bytes, back onto the same header,
+// and the walk listed it forever (found by fuzzing).
+TEST_F(TarBundleTest, AMemberSizeBeyondTheFileEndsTheWalk) {
+  const fs::path tar = tar_of_bundle("--format=gnu");
+  {
+    std::fstream f(tar, std::ios::binary | std::ios::in | std::ios::out);
+    f.seekp(124);
+    f.put(static_cast<char>(0x80));
+    for (int i = 1; i < 10; ++i) f.put(static_cast<char>(0xff));
+    f.put(static_cast<char>(0xfe));
+    f.put('\0');
+  }
+  EXPECT_TRUE(tar_members(tar).empty());
+  EXPECT_THAT(refusal_of(tar), HasSubstr(tar.string()));
+}
+
 TEST_F(TarBundleTest, AnEmptyMemberReadsAsNoBytes) {
   write_lines(kReferenceNavFile, {});
   const BundleFiles files(tar_of_bundle());
