@@ -654,6 +654,45 @@ class UploadStreamLimitTest(unittest.TestCase):
         self.assertEqual(self.probe(survey_id, 2)[0], grpc.StatusCode.OK)  # the slots came back
 
 
+class FinalizeLimitTest(unittest.TestCase):
+    """Issue 37 fault 3: a tenant's FinalizeSurvey calls in progress are bounded (--max-finalizes):
+    each reads and checks the whole survey on the scratch disk, and 24 at once exhausted the pool
+    and slowed every tenant. A survey refused for its CRS can be finalized again and again, as the
+    attack did; six at once against a limit of one: the others refused naming the limit, the
+    slot back once the call ends."""
+
+    def setUp(self):
+        self.server = Server(args=["--workers", "0", "--max-finalizes", "1"])
+
+    def tearDown(self):
+        self.server.stop()
+
+    def test_a_tenants_finalizes_are_bounded(self):
+        surveys = self.server.surveys
+        survey_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="refused", crs="EPSG:32633"), timeout=30).id
+        for f in FILES:
+            self.assertTrue(surveys.UploadFile(upload_requests(survey_id, f, read(f)), timeout=120).complete, f)
+        request = survey_pb2.FinalizeSurveyRequest(survey_id=survey_id)
+        calls = [surveys.FinalizeSurvey.future(request, timeout=120) for _ in range(6)]
+        answers = []
+        for call in calls:
+            try:
+                call.result()
+                answers.append((grpc.StatusCode.OK, ""))
+            except grpc.RpcError as error:
+                answers.append((error.code(), error.details()))
+        codes = [code for code, _ in answers]
+        self.assertGreaterEqual(codes.count(grpc.StatusCode.INVALID_ARGUMENT), 1, answers)  # the CRS: checked
+        self.assertGreaterEqual(codes.count(grpc.StatusCode.RESOURCE_EXHAUSTED), 1, answers)
+        self.assertEqual(codes.count(grpc.StatusCode.INVALID_ARGUMENT) + codes.count(grpc.StatusCode.RESOURCE_EXHAUSTED), 6,
+                         answers)
+        refused = next(details for code, details in answers if code == grpc.StatusCode.RESOURCE_EXHAUSTED)
+        self.assertRegex(refused, r"^this tenant has 1 FinalizeSurvey calls in progress, the limit \(--max-finalizes\)")
+        with self.assertRaises(grpc.RpcError) as again:  # the slot came back
+            surveys.FinalizeSurvey(request, timeout=120)
+        self.assertEqual(again.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, again.exception.details())
+
+
 class IdleWatchersTest(unittest.TestCase):
     """Issue 37 fault 1: watchers that wait cost the database nothing; they read it only when
     their job's bell rings. Measured in PostgreSQL's own count of the server database's
