@@ -54,7 +54,7 @@ Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose) {
   return f;
 }
 
-double overlap_area_m2(const Footprint& a, const Footprint& b) {
+FootprintOverlap footprint_overlap(const Footprint& a, const Footprint& b) {
   auto polygon = [](const Footprint& f) {
     std::vector<cv::Point2f> p;
     for (const auto& c : f.corners) p.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
@@ -62,8 +62,13 @@ double overlap_area_m2(const Footprint& a, const Footprint& b) {
     return p;
   };
   std::vector<cv::Point2f> intersection;
-  return cv::intersectConvexConvex(polygon(a), polygon(b), intersection, true);
+  FootprintOverlap overlap;
+  overlap.area_m2 = cv::intersectConvexConvex(polygon(a), polygon(b), intersection, true);
+  for (const cv::Point2f& p : intersection) overlap.polygon.emplace_back(p.x, p.y);
+  return overlap;
 }
+
+double overlap_area_m2(const Footprint& a, const Footprint& b) { return footprint_overlap(a, b).area_m2; }
 
 namespace {
 

@@ -19,6 +19,14 @@ struct Footprint {
 
 Footprint footprint_of(const Submap& submap, const Eigen::Isometry3d& pose);
 
+// The intersection of two footprints: its area and its corners, counter-clockwise (none when the
+// footprints do not meet).
+struct FootprintOverlap {
+  double area_m2 = 0;
+  std::vector<Eigen::Vector2d> polygon;
+};
+FootprintOverlap footprint_overlap(const Footprint& a, const Footprint& b);
+
 // Area of the intersection of two footprints.
 double overlap_area_m2(const Footprint& a, const Footprint& b);
 

@@ -33,6 +33,9 @@ struct GridGeometry {
   double south_m() const { return static_cast<double>(bottom()) * resolution_m; }
   double north_m() const { return static_cast<double>(top + 1) * resolution_m; }
   std::size_t cells() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+  // The global column / row of the cell holding a CRS easting / northing.
+  std::int64_t col_of(double easting) const { return static_cast<std::int64_t>(std::floor(easting / resolution_m)); }
+  std::int64_t row_of(double northing) const { return static_cast<std::int64_t>(std::floor(northing / resolution_m)); }
   bool contains(std::int64_t col, std::int64_t row) const {
     return col >= left && col <= right() && row >= bottom() && row <= top;
   }

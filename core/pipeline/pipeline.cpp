@@ -309,21 +309,18 @@ double significant_change(const DifferenceMap& map, std::int64_t col, std::int64
 // least-squares registration takes for a misfit. NaN when the overlap has no cell of both.
 double change_over_overlap(const PipelineResult& r, const Constraint& c, const DifferenceMap& later,
                            const DifferenceMap* earlier) {
-  std::vector<cv::Point2f> polygons[2], overlap;
-  for (int side = 0; side < 2; ++side) {
-    const int node = side == 0 ? c.from : c.to;
-    for (const auto& q : footprint_of(r.submaps.submaps[node], r.optimized_poses[node]).corners) {
-      polygons[side].emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
-    }
-    if (cv::contourArea(polygons[side], true) < 0) std::reverse(polygons[side].begin(), polygons[side].end());
-  }
-  if (cv::intersectConvexConvex(polygons[0], polygons[1], overlap, true) <= 0) return NAN;
+  const FootprintOverlap shared = footprint_overlap(footprint_of(r.submaps.submaps[c.from], r.optimized_poses[c.from]),
+                                                    footprint_of(r.submaps.submaps[c.to], r.optimized_poses[c.to]));
+  if (shared.area_m2 <= 0) return NAN;
+  std::vector<cv::Point2f> overlap;  // the float corners OpenCV gave, exactly
+  for (const Eigen::Vector2d& p : shared.polygon) overlap.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
   const cv::Rect box = cv::boundingRect(overlap);
-  const double res = later.geometry.resolution_m, e0 = r.submaps.origin.easting, n0 = r.submaps.origin.northing;
+  const GridGeometry& g = later.geometry;
+  const double res = g.resolution_m, e0 = r.submaps.origin.easting, n0 = r.submaps.origin.northing;
   double sum = 0;
   int cells = 0;
-  for (auto col = static_cast<std::int64_t>(std::floor((e0 + box.x) / res)); col <= std::floor((e0 + box.br().x) / res); ++col) {
-    for (auto row = static_cast<std::int64_t>(std::floor((n0 + box.y) / res)); row <= std::floor((n0 + box.br().y) / res); ++row) {
+  for (std::int64_t col = g.col_of(e0 + box.x); col <= g.col_of(e0 + box.br().x); ++col) {
+    for (std::int64_t row = g.row_of(n0 + box.y); row <= g.row_of(n0 + box.br().y); ++row) {
       const cv::Point2f centre(static_cast<float>((col + 0.5) * res - e0), static_cast<float>((row + 0.5) * res - n0));
       if (cv::pointPolygonTest(overlap, centre, false) < 0) continue;
       const double change = significant_change(later, col, row) - (earlier ? significant_change(*earlier, col, row) : 0.0);
@@ -382,8 +379,7 @@ int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, co
     const double easting = r.submaps.origin.easting + p.x(), northing = r.submaps.origin.northing + p.y();
     return std::any_of(since_first.begin() + 1, since_first.end(), [&](const DifferenceMap& map) {
       const GridGeometry& g = map.geometry;
-      const auto col = static_cast<std::int64_t>(std::floor(easting / g.resolution_m));
-      const auto row = static_cast<std::int64_t>(std::floor(northing / g.resolution_m));
+      const std::int64_t col = g.col_of(easting), row = g.row_of(northing);
       return g.contains(col, row) && map.significant[g.index(col, row)] == 1.0f;
     });
   };
