@@ -1,4 +1,6 @@
+#include <array>
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -9,6 +11,7 @@
 #include "core/io/bundle.h"
 #include "core/io/gsf/gsf_survey.h"
 #include "core/sim/simulator.h"
+#include "core/tiles/geotiff_writer.h"
 
 namespace bathyslam::cli {
 namespace {
@@ -24,6 +27,7 @@ struct SimulateOptions {
   std::optional<double> wavelength_m;
   std::optional<double> wave_angle_deg;
   int epoch = 0;
+  double sand_migration_m = sim::kSandMigrationPerEpochM;
   std::optional<int> beams;
   std::optional<double> swath_deg;
   std::string format = "bundle";
@@ -67,6 +71,15 @@ void print_drift_model(const sim::SimulationConfig& config, const sim::Simulatio
   }
 }
 
+// A later epoch's true change since epoch 1 as truth_change.tif (one Float32 band "change"), the
+// answer a site's difference maps are scored against: not part of the survey.
+void write_truth_change(const sim::ChangeGrid& truth, const std::string& crs, const std::string& out) {
+  const GridGeometry geometry{.resolution_m = truth.cell_m, .left = truth.left, .top = truth.top, .width = truth.cols,
+                              .height = truth.rows};
+  const std::array<NamedBand, 1> bands{{{"change", &truth.change}}};
+  write_geotiff(geometry, bands, crs, std::filesystem::path(out) / "truth_change.tif");
+}
+
 void run_simulate(const SimulateOptions& o) {
   sim::SimulationConfig config;
   config.scenario = sim::parse_scenario(o.scenario);
@@ -79,6 +92,7 @@ void run_simulate(const SimulateOptions& o) {
   config.line_spacing_m = o.line_spacing_m;
   config.altitude_m = o.altitude_m;
   config.epoch = o.epoch;
+  config.sand_migration_per_epoch_m = o.sand_migration_m;
   if (o.beams) config.sonar.beams = *o.beams;
   if (o.swath_deg) config.sonar.swath_deg = *o.swath_deg;
 
@@ -86,6 +100,7 @@ void run_simulate(const SimulateOptions& o) {
   const sim::Simulation simulation = sim::simulate(config);
   if (o.format == "gsf") std::printf("wrote %s\n", write_gsf_survey(simulation.survey, o.out).c_str());
   else write_bundle(simulation.survey, o.out);
+  if (simulation.truth_change) write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -153,6 +168,11 @@ void add_simulate_command(CLI::App& app) {
                   "the site's k-th survey (1, 2, ...): the same seabed, changed after epoch 1, flown on other lines with "
                   "its own drift and start fix; 0: a survey alone")
       ->check(CLI::Range(0, 1000));
+  cmd->add_option("--sand-migration", options->sand_migration_m,
+                  "a later epoch: how far sand waves (sandwaves, mixed) moved across their crests per epoch, in m at the "
+                  "lake's scale")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
   cmd->add_option("--beams", options->beams, "the sonar's beams (512): another vehicle's sonar")->check(CLI::Range(16, 4096));
   cmd->add_option("--swath", options->swath_deg, "the sonar's swath in degrees (140)")->check(CLI::Range(10.0, 170.0));
   cmd->add_option("--format", options->format,

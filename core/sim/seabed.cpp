@@ -46,6 +46,7 @@ struct WaveTrain {
   double sinuosity_rad = 0;
   double sinuosity_wavelength_m = 100;
   double sinuosity_phase = 0;
+  double migration_m = 0;  // moved across the crests, downstream (`across`), since the first survey
 
   static WaveTrain draw_train(double crest_angle, double wavelength_m, double height_m,
                               std::mt19937_64& rng) {
@@ -65,7 +66,7 @@ struct WaveTrain {
     const double along = p.dot(Eigen::Vector2d(across.y(), -across.x()));
     const double wander =
         sinuosity_rad * std::sin(2 * M_PI * along / sinuosity_wavelength_m + sinuosity_phase);
-    return 0.5 * height_m * std::cos(2 * M_PI * p.dot(across) / wavelength_m + phase + wander);
+    return 0.5 * height_m * std::cos(2 * M_PI * (p.dot(across) - migration_m) / wavelength_m + phase + wander);
   }
 };
 
@@ -93,6 +94,7 @@ class SandWaves final : public Seabed {
     const double ripple_angle = crest + (unit(rng) - 0.5) * 40.0 * kDeg;
     trains_.push_back(WaveTrain::draw_train(ripple_angle, draw(config.megaripple_wavelength_m, rng),
                                             config.megaripple_height_m, rng));
+    for (WaveTrain& train : trains_) train.migration_m = config.sand_migration_m;
   }
 
   Ground at(const Eigen::Vector2d& p) const override {

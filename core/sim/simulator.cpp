@@ -187,6 +187,26 @@ void start_from_fix(std::vector<NavSample>& nav, const Eigen::Vector3d& error) {
   }
 }
 
+// `after` less `before` at the centres of the global cells of `cell_m` over `area` (map frame,
+// `e0`, `n0` its origin in the CRS).
+ChangeGrid change_since(const Terrain& before, const Terrain& after, const Area& area, double cell_m, double e0, double n0) {
+  ChangeGrid g;
+  g.cell_m = cell_m;
+  g.left = static_cast<std::int64_t>(std::floor((e0 + area.min.x()) / cell_m));
+  g.top = static_cast<std::int64_t>(std::floor((n0 + area.max.y()) / cell_m));
+  g.cols = static_cast<int>(static_cast<std::int64_t>(std::floor((e0 + area.max.x()) / cell_m)) - g.left + 1);
+  g.rows = static_cast<int>(g.top - static_cast<std::int64_t>(std::floor((n0 + area.min.y()) / cell_m)) + 1);
+  g.change.resize(static_cast<std::size_t>(g.cols) * static_cast<std::size_t>(g.rows));
+  for (int r = 0; r < g.rows; ++r) {
+    const double y = (static_cast<double>(g.top - r) + 0.5) * cell_m - n0;
+    for (int c = 0; c < g.cols; ++c) {
+      const double x = (static_cast<double>(g.left + c) + 0.5) * cell_m - e0;
+      g.change[static_cast<std::size_t>(r) * g.cols + c] = static_cast<float>(after.elevation(x, y) - before.elevation(x, y));
+    }
+  }
+  return g;
+}
+
 }  // namespace
 
 Simulation simulate(const SimulationConfig& given) {
@@ -196,6 +216,8 @@ Simulation simulate(const SimulationConfig& given) {
   motion.seed = config.seed;
   TerrainConfig terrain_config = config.terrain;
   terrain_config.seed = given.seed;
+  // In the terrain's own units: Terrain::generate stretches it by the scale with the rest.
+  if (config.epoch > 1) terrain_config.sand_migration_m = (config.epoch - 1) * config.sand_migration_per_epoch_m;
   const double k = world_scale(config);
   const SonarConfig sonar = sonar_of(config);
   motion.vehicle_depth_m *= k;
@@ -219,6 +241,12 @@ Simulation simulate(const SimulationConfig& given) {
   sim.terrain = Terrain::generate(terrain_config, seabed_area, k);
   for (const SeabedChange& change : changes) {
     sim.terrain.change([&](double x, double y) { return elevation_change(change, x, y); });
+  }
+  if (config.epoch > 1) {
+    TerrainConfig first = terrain_config;
+    first.sand_migration_m = 0;
+    sim.truth_change = change_since(Terrain::generate(first, seabed_area, k), sim.terrain, seabed_area, 0.5 * k,
+                                    config.origin_easting, config.origin_northing);
   }
 
   Survey& survey = sim.survey;
@@ -289,6 +317,8 @@ Simulation simulate(const SimulationConfig& given) {
                           {"changes_since_epoch_1", nlohmann::json::array()},
                           {"local_origin", {{"easting", config.origin_easting}, {"northing", config.origin_northing}}}};
     for (const SeabedChange& change : changes) simulation["site"]["changes_since_epoch_1"].push_back(to_json(change));
+    const bool sand_waves = config.terrain.kind == TerrainKind::kSandWaves || config.terrain.kind == TerrainKind::kMixed;
+    if (config.epoch > 1 && sand_waves) simulation["site"]["sand_waves_migrated_m"] = k * terrain_config.sand_migration_m;
   }
   return sim;
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/sim/drift.h"
+#include "core/sim/site.h"
 #include "core/sim/sonar.h"
 #include "core/sim/terrain.h"
 #include "core/sim/trajectory.h"
@@ -35,6 +36,9 @@ struct SimulationConfig {
   // 0: a survey alone. k >= 1: the k-th survey of a site (site.h): the seabed of `seed` over the
   // site's area, changed after epoch 1; the pattern, drift, sonar noise and start fix of epoch k.
   int epoch = 0;
+  // A later epoch's sand waves (sandwaves, mixed) have moved this far across their crests per
+  // epoch since the first, at the lake's scale (site.h).
+  double sand_migration_per_epoch_m = kSandMigrationPerEpochM;
   MotionConfig motion;    // its seed is replaced by `seed`
   SonarConfig sonar;
   double nav_rate_hz = 20.0;
@@ -43,9 +47,21 @@ struct SimulationConfig {
   double origin_northing = 4630000.0;
 };
 
+// A later epoch of a site: the seabed's true change since epoch 1 (elevation, m; every change of
+// site.h, sand waves' migration included), at cell centres of a grid of global CRS cells as
+// core/fuse/grid.h's GridGeometry counts them (column `left` from the west, row `top` the
+// northernmost, rows north first), for scoring difference maps (bench_change_detection).
+struct ChangeGrid {
+  double cell_m = 0;
+  std::int64_t left = 0, top = 0;
+  int cols = 0, rows = 0;
+  std::vector<float> change;
+};
+
 struct Simulation {
   Survey survey;  // nav = dead reckoning, reference_nav = truth
   Terrain terrain;
+  std::optional<ChangeGrid> truth_change;  // epochs after the first
   double sigma_yaw_rad = 0;  // the paper model's sigma_yaw used (0 for the others)
   double sigma_translation_m = 0;  // and its sigma_translation
   std::optional<HeadingStep> compass_step;  // the compass-step model's fault

@@ -3,7 +3,8 @@
 // Epoch 1 flies the scenario's pattern; each later epoch flies it turned about the block's centre
 // (180° and 5° more each epoch: other headings, another start) and, every other epoch, moved half
 // a line spacing (other lines), with its own drift, a start fix off by a few metres, and the seabed changed
-// since epoch 1: a scour pit, an object dropped on the bottom, an area dredged.
+// since epoch 1: a scour pit, an object dropped on the bottom, an area dredged, and sand waves
+// (where the seabed has them) migrated across their crests.
 #include <string>
 #include <vector>
 
@@ -14,6 +15,10 @@
 #include "core/sim/trajectory.h"
 
 namespace bathyslam::sim {
+
+// How far sand waves move between two surveys a month apart, at the lake's scale: migration
+// rates of sand waves on shelves are metres to tens of metres a year, faster under tides and storms.
+inline constexpr double kSandMigrationPerEpochM = 2.0;
 
 // One change of the seabed between epoch 1 and later epochs, in the local map frame.
 struct SeabedChange {

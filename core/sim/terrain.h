@@ -58,6 +58,9 @@ struct TerrainConfig {
   // Megaripples riding on the waves: texture at the scale of the sonar footprint.
   Range megaripple_wavelength_m{1.0, 2.0};
   double megaripple_height_m = 0.04;
+  // How far every sand-wave train has moved across its crests since the site's first survey
+  // (site.h): a repeat survey finds the bedforms migrated, not the seabed's frame.
+  double sand_migration_m = 0;
 
   // Boulders on flat sand: sparse enough that a submap holds a handful or none.
   Range boulder_area_m2{400.0, 1000.0};   // sea floor per boulder

@@ -12,6 +12,7 @@
 #include <gdal_priv.h>
 
 #include "core/fuse/grid.h"
+#include "core/tiles/geotiff_writer.h"  // NamedBand
 
 namespace bathyslam {
 
@@ -22,11 +23,6 @@ using GdalDatasetPtr = std::unique_ptr<GDALDataset, GdalDatasetCloser>;
 
 // The driver called `name`, registering GDAL's drivers on first use; throws if GDAL lacks it.
 GDALDriver* gdal_driver(const char* name);
-
-struct NamedBand {
-  const char* name;
-  const std::vector<float>* values;  // geometry.cells() values, north-up rows
-};
 
 // A MEM dataset of `geometry` in `crs` ("EPSG:<code>") holding `bands`, NoData `no_data`.
 // Throws std::runtime_error starting with `what` (the file being written and its format).

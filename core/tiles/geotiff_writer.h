@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "core/fuse/grid.h"
 
@@ -15,8 +16,13 @@ namespace bathyslam {
 // the path when GDAL cannot.
 void write_geotiff(const GridRaster& raster, std::string_view crs, const std::filesystem::path& path);
 
-// The same for any Float32 bands of `geometry` (NamedBand, gdal_raster.h), NaN NoData.
-struct NamedBand;
+// A Float32 band of a raster and its name.
+struct NamedBand {
+  const char* name;
+  const std::vector<float>* values;  // geometry.cells() values, north-up rows
+};
+
+// The same for any Float32 bands of `geometry`, NaN NoData.
 void write_geotiff(const GridGeometry& geometry, std::span<const NamedBand> bands, std::string_view crs,
                    const std::filesystem::path& path);
 

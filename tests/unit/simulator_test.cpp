@@ -223,5 +223,49 @@ TEST(Site, ALaterEpochFliesOtherLinesOverTheSameSeabedChangedWhereItSays) {
   EXPECT_NE(second.survey.metadata.name, first.survey.metadata.name);
 }
 
+// Sand waves migrate between epochs: the later epoch's truth grid is the two terrains' difference
+// at its cells (the migration and the listed changes together), recorded as a distance; with no
+// migration the sand waves stay and only the listed changes differ.
+TEST(Site, ALaterEpochsSandWavesHaveMigratedAndItsTruthSaysWhere) {
+  SimulationConfig config;
+  config.seed = 3;
+  config.terrain.kind = TerrainKind::kSandWaves;
+  config.epoch = 1;
+  const Simulation first = simulate(config);
+  EXPECT_FALSE(first.truth_change.has_value());
+  config.epoch = 2;
+  const Simulation moved = simulate(config);
+  config.sand_migration_per_epoch_m = 0;
+  const Simulation still = simulate(config);
+  EXPECT_EQ(moved.survey.metadata.vehicle["simulation"]["site"]["sand_waves_migrated_m"].get<double>(), 2.0);
+  ASSERT_TRUE(moved.truth_change.has_value());
+  const ChangeGrid& truth = *moved.truth_change;
+  const auto& site = moved.survey.metadata.vehicle["simulation"]["site"];
+  const double e0 = site["local_origin"]["easting"], n0 = site["local_origin"]["northing"];
+  double moved2 = 0, still_max = 0;
+  int cells = 0;
+  for (int r = 0; r < truth.rows; r += 7) {
+    for (int c = 0; c < truth.cols; c += 7) {
+      const double x = (static_cast<double>(truth.left + c) + 0.5) * truth.cell_m - e0;
+      const double y = (static_cast<double>(truth.top - r) + 0.5) * truth.cell_m - n0;
+      const double t = truth.change[static_cast<std::size_t>(r) * truth.cols + c];
+      ASSERT_NEAR(t, moved.terrain.elevation(x, y) - first.terrain.elevation(x, y), 1e-4) << x << ", " << y;
+      double listed = 0;
+      for (const auto& ch : site["changes_since_epoch_1"]) {
+        listed += elevation_change({ch["kind"].get<std::string>(), {ch["centre_m"][0].get<double>(), ch["centre_m"][1].get<double>()},
+                                    {ch["size_m"][0].get<double>(), ch["size_m"][1].get<double>()}, ch["height_m"].get<double>()},
+                                   x, y);
+      }
+      if (listed != 0) continue;
+      moved2 += t * t;
+      still_max = std::max(still_max, std::abs(still.terrain.elevation(x, y) - first.terrain.elevation(x, y)));
+      ++cells;
+    }
+  }
+  ASSERT_GT(cells, 1000);
+  EXPECT_GT(std::sqrt(moved2 / cells), 0.02) << "the sand waves did not move";
+  EXPECT_LT(still_max, 1e-4) << "without migration the sand waves stay where they were";
+}
+
 }  // namespace
 }  // namespace bathyslam::sim
