@@ -29,10 +29,11 @@ if [ "$target" = tar ]; then
     tail -c +2 "$root/tests/fuzz/bundle_corpus/${pair%%:*}" > "$bundle/${pair#*:}"
   done
   cp "$bundle"/* "$out/seed/$(printf 'long%.0s' {1..30})/"
-  ln -sf nav.csv "$out/seed/a bundle/reference_nav.csv"
+  rm -f "$out/seed/a bundle/reference_nav.csv"
   (cd "$out/seed" && tar --format=ustar -cf "$out/corpus/ustar.tar" "a bundle/survey.json" "a bundle/nav.csv" "a bundle/pings.csv" &&
      tar --format=pax -cf "$out/corpus/pax.tar" "a bundle" &&
      tar --format=gnu -cf "$out/corpus/gnu-long.tar" "$(printf 'long%.0s' {1..30})" &&
+     ln -sf nav.csv "a bundle/reference_nav.csv" &&
      tar --format=gnu -cf "$out/corpus/symlink.tar" "a bundle")
 else
   cp -rn "$root"/tests/fuzz/bundle_corpus/* "$out/corpus/"

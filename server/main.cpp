@@ -75,7 +75,16 @@ struct QuotaOptions {
 int tenant_quota(const std::string& db, const QuotaOptions& q) {
   storage::ConnectionPool pool(db, 1);
   storage::SurveyStore surveys(pool);
-  const std::int64_t tenant = tenant_named(pool, surveys, q.tenant);
+  std::int64_t tenant = 0;
+  {
+    auto connection = pool.acquire();
+    storage::Result row = connection->exec("SELECT id FROM tenants WHERE name = $1", {q.tenant});
+    if (row.rows() == 0) {  // a typo must not make a tenant
+      std::fprintf(stderr, "bathyslam-server tenant quota: no tenant named '%s' (token create makes one)\n", q.tenant.c_str());
+      return 1;
+    }
+    tenant = row.int64(0, "id");
+  }
   if (q.none) surveys.set_quota(tenant, std::nullopt);
   else if (q.bytes >= 0) surveys.set_quota(tenant, q.bytes);
   const storage::StorageUse use = surveys.storage_use(tenant);
@@ -379,7 +388,7 @@ int main(int argc, char** argv) {
   QuotaOptions q;
   CLI::App* quota = tenant->add_subcommand("quota", "show a tenant's storage, or set its quota: the bytes its uploads may hold");
   add_db_option(quota);
-  quota->add_option("--tenant", q.tenant, "tenant name (created if needed)")->required();
+  quota->add_option("--tenant", q.tenant, "tenant name")->required();
   auto* bytes = quota->add_option("--bytes", q.bytes, "the quota in bytes")->check(CLI::NonNegativeNumber);
   quota->add_flag("--none", q.none, "no quota")->excludes(bytes);
   CLI11_PARSE(app, argc, argv);

@@ -94,7 +94,10 @@ class SandWaves final : public Seabed {
     const double ripple_angle = crest + (unit(rng) - 0.5) * 40.0 * kDeg;
     trains_.push_back(WaveTrain::draw_train(ripple_angle, draw(config.megaripple_wavelength_m, rng),
                                             config.megaripple_height_m, rng));
-    for (WaveTrain& train : trains_) train.migration_m = config.sand_migration_m;
+  }
+
+  void migrate_sand_waves(double distance_m) override {
+    for (WaveTrain& train : trains_) train.migration_m = distance_m;
   }
 
   Ground at(const Eigen::Vector2d& p) const override {
@@ -349,6 +352,10 @@ class Mixed final : public Seabed {
     return sum;
   }
 
+  void migrate_sand_waves(double distance_m) override {
+    for (auto& patch : patches_) patch->migrate_sand_waves(distance_m);
+  }
+
  private:
   static constexpr double kJitter = 0.1;  // patch borders wander by ~a tenth of a patch
   static constexpr double kBand = 0.15;   // half the border band, in patches
@@ -384,6 +391,8 @@ class Centred final : public Seabed {
     g.height -= offset_;
     return g;
   }
+  // The offset stays the one of the seabed as drawn: migration moves the bedforms, not the mean.
+  void migrate_sand_waves(double distance_m) override { seabed_->migrate_sand_waves(distance_m); }
 
  private:
   std::unique_ptr<Seabed> seabed_;

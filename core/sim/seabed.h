@@ -19,6 +19,9 @@ class Seabed {
  public:
   virtual ~Seabed() = default;
   virtual Ground at(const Eigen::Vector2d& p) const = 0;
+  // Its sand waves moved `distance_m` across their crests (a later epoch of a site); nothing else
+  // moves, and the seabed's mean height stays the one it was centred on.
+  virtual void migrate_sand_waves(double /*distance_m*/) {}
 };
 
 // A seabed of `kind` (not kLake) laid out over `area` (channels cross it, the slope break runs

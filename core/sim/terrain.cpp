@@ -160,6 +160,7 @@ void Terrain::sample_lake(const TerrainConfig& config) {
 void Terrain::sample_seabed(const TerrainConfig& config, const Area& area) {
   auto rng = make_rng(config.seed, kTerrainStream);
   const std::unique_ptr<Seabed> seabed = make_seabed(config.kind, config, area, rng);
+  seabed->migrate_sand_waves(config.sand_migration_m);  // after centring: the mean stays
 #pragma omp parallel for schedule(dynamic, 16)
   for (int j = 0; j < rows_; ++j) {
     for (int i = 0; i < cols_; ++i) {

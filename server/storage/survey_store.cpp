@@ -358,7 +358,9 @@ StorageUse storage_use_on(Connection& connection, std::int64_t tenant_id) {
 
 // Refuses a declaration of `size_bytes` more that would pass the tenant's quota. Under a lock on
 // the tenant's row (NO KEY: a survey created meanwhile need not wait), so that concurrent
-// declarations are counted one after the other.
+// declarations are counted one after the other. The caller holds the survey's lock first; a job's
+// submit locks the tenant, then (its foreign key) the survey, but only of a finalized survey,
+// which begin_upload refuses before it gets here: the two orders never meet on one survey.
 void check_quota(Connection& connection, std::int64_t survey_id, std::int64_t size_bytes) {
   const std::int64_t tenant =
       connection
@@ -366,10 +368,11 @@ void check_quota(Connection& connection, std::int64_t survey_id, std::int64_t si
                 {survey_id})
           .int64(0, "id");
   const StorageUse use = storage_use_on(connection, tenant);
-  if (use.quota_bytes && use.stored_bytes + size_bytes > *use.quota_bytes)
+  if (use.quota_bytes && size_bytes > *use.quota_bytes - use.stored_bytes)  // no sum to overflow
     throw UploadError(UploadError::Kind::kQuota,
                       "size_bytes: " + std::to_string(size_bytes) + " more bytes would take this tenant's files to " +
-                          std::to_string(use.stored_bytes + size_bytes) + " bytes, over its quota of " +
+                          std::to_string(static_cast<unsigned long long>(use.stored_bytes) + static_cast<unsigned long long>(size_bytes)) +
+                          " bytes, over its quota of " +
                           std::to_string(*use.quota_bytes) + "; delete surveys or ask the operator for more");
 }
 

@@ -267,5 +267,33 @@ TEST(Site, ALaterEpochsSandWavesHaveMigratedAndItsTruthSaysWhere) {
   EXPECT_LT(still_max, 1e-4) << "without migration the sand waves stay where they were";
 }
 
+// On a mixed seabed only the sand-wave patches move: the others (boulders, channel, slope, flat)
+// stay to the float, their mean depth included (a migration once re-centred the whole seabed by
+// a fraction of a millimetre).
+TEST(Site, OnAMixedSeabedOnlyTheSandWavesMigrate) {
+  SimulationConfig config;
+  config.seed = 2;
+  config.terrain.kind = TerrainKind::kMixed;
+  config.epoch = 1;
+  const Simulation first = simulate(config);
+  config.epoch = 2;
+  config.sand_migration_per_epoch_m = 0;
+  const Simulation still = simulate(config);
+  config.sand_migration_per_epoch_m = 2;
+  const Simulation moved = simulate(config);
+  int stayed = 0, cells = 0;
+  for (double x = -20; x < 220; x += 1.3) {
+    for (double y = -30; y < 80; y += 1.1) {
+      const double listed = still.terrain.elevation(x, y) - first.terrain.elevation(x, y);
+      if (listed != 0) continue;  // the pit, the object, the dredged area
+      stayed += std::abs(moved.terrain.elevation(x, y) - first.terrain.elevation(x, y)) < 1e-6;
+      ++cells;
+    }
+  }
+  ASSERT_GT(cells, 5000);
+  EXPECT_GT(stayed, cells / 3) << "the patches that are not sand waves moved too";
+  EXPECT_LT(stayed, cells) << "no sand waves moved";
+}
+
 }  // namespace
 }  // namespace bathyslam::sim
