@@ -3,6 +3,8 @@
 and finish the work it took. The same environment as service_api_test.py (set by ctest), whose
 Server and helpers this reuses: a real bathyslam-server on a real PostgreSQL."""
 import hashlib
+import os
+import signal
 import subprocess
 import time
 import unittest
@@ -45,10 +47,18 @@ class OutageTest(OwnCluster):
     def assert_alive(self):
         self.assertIsNone(self.server.process.poll(), "the server died:\n" + self.server.server_log())
 
-    def outage(self, seconds):
-        """The cluster stopped for `seconds`: health follows it, the server stays up."""
+    def outage(self, seconds, paused=None):
+        """The cluster stopped for `seconds`: health follows it, the server stays up. `paused`: a
+        process (the server, an uploading CLI) stopped with SIGSTOP while the cluster stops, so that
+        the work under test is still where it was when the outage begins, however fast the machine."""
+        if paused:
+            os.kill(paused, signal.SIGSTOP)
         stopped = time.monotonic()
-        pg("stop", self.cluster)
+        try:
+            pg("stop", self.cluster)
+        finally:
+            if paused:
+                os.kill(paused, signal.SIGCONT)
         self.assertEqual(self.wait_for(NOT_SERVING), NOT_SERVING, self.server.server_log())
         while time.monotonic() - stopped < seconds:
             self.assert_alive()
@@ -66,11 +76,11 @@ class JobThroughOutageTest(OutageTest):
             self.assertNotIn(event.state, (job_pb2.SUCCEEDED, job_pb2.FAILED), "the job ended before the outage")
             if event.stage == "register":
                 break
-        self.outage(15)  # while it registers: heartbeats, state polls and progress events fail
+        self.outage(15, paused=self.server.process.pid)  # while it registers: heartbeats, state polls and progress events fail
         while (now := self.server.jobs.GetJob(job_pb2.GetJobRequest(job_id=job.id), timeout=30)).stage not in ("map", "store"):
             self.assertEqual(now.state, job_pb2.RUNNING, now.error + self.server.server_log())
-            time.sleep(0.1)
-        self.outage(8)  # while it fuses the map and stores its results
+            time.sleep(0.02)
+        self.outage(8, paused=self.server.process.pid)  # while it fuses the map and stores its results
 
         disturbed = final_state(self.server, job.id)
         log = self.server.server_log()
@@ -101,7 +111,7 @@ class UploadThroughRestartTest(OutageTest):
             self.assertIsNone(cli.poll(), "the upload ended before the restart")
             self.assertLess(time.monotonic(), deadline, "pings.csv never started")
             time.sleep(0.05)
-        self.outage(3)
+        self.outage(3, paused=cli.pid)
         out, err = cli.communicate(timeout=300)
         self.assertEqual(cli.returncode, 0, err + self.server.server_log())
         self.assertRegex(out, r"survey \d+ ready")
