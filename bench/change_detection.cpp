@@ -27,10 +27,7 @@ int main(int argc, char** argv) {
   const double threshold = argc > 3 ? std::stod(argv[3]) : 0.3;
   const nlohmann::json site = nlohmann::json::parse(std::ifstream(argv[2]))["vehicle"]["simulation"]["site"];
   std::vector<SeabedChange> changes;
-  for (const auto& c : site["changes_since_epoch_1"]) {
-    changes.push_back({c["kind"].get<std::string>(), {c["centre_m"][0].get<double>(), c["centre_m"][1].get<double>()},
-                       {c["size_m"][0].get<double>(), c["size_m"][1].get<double>()}, c["height_m"].get<double>()});
-  }
+  for (const auto& c : site["changes_since_epoch_1"]) changes.push_back(seabed_change_from_json(c));
   const double east0 = site["local_origin"]["easting"], north0 = site["local_origin"]["northing"];
   GDALAllRegister();
   const std::filesystem::path truth_tif = std::filesystem::path(argv[2]).parent_path() / "truth_change.tif";

@@ -78,4 +78,11 @@ nlohmann::json to_json(const SeabedChange& change) {
           {"height_m", change.height_m}};
 }
 
+SeabedChange seabed_change_from_json(const nlohmann::json& json) {
+  return {json.at("kind").get<std::string>(),
+          {json.at("centre_m")[0].get<double>(), json.at("centre_m")[1].get<double>()},
+          {json.at("size_m")[0].get<double>(), json.at("size_m")[1].get<double>()},
+          json.at("height_m").get<double>()};
+}
+
 }  // namespace bathyslam::sim

@@ -47,5 +47,7 @@ Area site_area(const std::vector<LineSpec>& lines, double spacing_m, double marg
 Eigen::Vector3d start_fix_error(uint64_t seed, int epoch);
 
 nlohmann::json to_json(const SeabedChange& change);
+// A change as survey.json records it (to_json's inverse).
+SeabedChange seabed_change_from_json(const nlohmann::json& json);
 
 }  // namespace bathyslam::sim

@@ -26,6 +26,12 @@ void check_name(const std::string& field, std::string_view name, std::size_t max
   if (printable(name) != name) throw invalid(field, "must be UTF-8 without control characters: " + quoted_input(name));
 }
 
+std::optional<std::string> name_filter(const std::string& field, const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  check_name(field, name);
+  return name;
+}
+
 std::int64_t caller_tenant(const ServiceContext& context, const grpc::ServerContextBase& call) {
   const auto& metadata = call.client_metadata();
   const auto header = metadata.find("authorization");

@@ -74,6 +74,8 @@ void check_text(const std::string& field, std::string_view text);
 // A name people read (a survey's, a parameter's): besides check_text, at most `max_bytes`, UTF-8,
 // and no control characters (a newline in a name would break every listing and log line it is in).
 void check_name(const std::string& field, std::string_view name, std::size_t max_bytes = kMaxNameBytes);
+// A list's optional filter by name (ListSurveys, ListSites): nullopt when empty, else checked as a name.
+std::optional<std::string> name_filter(const std::string& field, const std::string& name);
 
 // The tenant of the caller: `authorization: Bearer <token>` metadata, or the dev tenant.
 // UNAUTHENTICATED otherwise.

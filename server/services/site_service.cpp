@@ -140,11 +140,7 @@ grpc::Status SiteService::ListSites(grpc::ServerContext* call, const v1::ListSit
   return handle("ListSites", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
     const int size = page_size(request->page_size());
-    std::optional<std::string> name;
-    if (!request->name().empty()) {
-      check_name("name", request->name());
-      name = request->name();
-    }
+    const std::optional<std::string> name = name_filter("name", request->name());
     auto sites = context_.sites.list_sites(tenant, page_token(request->page_token()), size + 1, name);
     const bool more = trim_to_page(sites, size);
     for (const storage::SiteRecord& site : sites) describe(site, reply->add_sites());

@@ -297,11 +297,7 @@ grpc::Status SurveyService::ListSurveys(grpc::ServerContext* call, const v1::Lis
   return handle("ListSurveys", call, [&] {
     const std::int64_t tenant = caller_tenant(context_, *call);
     const int size = page_size(request->page_size());
-    std::optional<std::string> name;
-    if (!request->name().empty()) {
-      check_name("name", request->name());
-      name = request->name();
-    }
+    const std::optional<std::string> name = name_filter("name", request->name());
     // One more than asked: whether there is a next page.
     auto surveys = context_.surveys.list_surveys(tenant, page_token(request->page_token()), size + 1, name);
     const bool more = trim_to_page(surveys, size);

@@ -181,14 +181,7 @@ TEST(Site, ALaterEpochFliesOtherLinesOverTheSameSeabedChangedWhereItSays) {
   const auto& site = second.survey.metadata.vehicle["simulation"]["site"];
   ASSERT_EQ(site["changes_since_epoch_1"].size(), 3u);
   std::vector<SeabedChange> changes;
-  for (const auto& c : site["changes_since_epoch_1"]) {
-    SeabedChange recorded;
-    recorded.kind = c["kind"].get<std::string>();
-    recorded.centre = {c["centre_m"][0].get<double>(), c["centre_m"][1].get<double>()};
-    recorded.size_m = {c["size_m"][0].get<double>(), c["size_m"][1].get<double>()};
-    recorded.height_m = c["height_m"].get<double>();
-    changes.push_back(recorded);
-  }
+  for (const auto& c : site["changes_since_epoch_1"]) changes.push_back(seabed_change_from_json(c));
   const auto change_at = [&](double x, double y) {
     double sum = 0;
     for (const SeabedChange& c : changes) sum += elevation_change(c, x, y);
@@ -251,11 +244,7 @@ TEST(Site, ALaterEpochsSandWavesHaveMigratedAndItsTruthSaysWhere) {
       const double t = truth.change[static_cast<std::size_t>(r) * truth.cols + c];
       ASSERT_NEAR(t, moved.terrain.elevation(x, y) - first.terrain.elevation(x, y), 1e-4) << x << ", " << y;
       double listed = 0;
-      for (const auto& ch : site["changes_since_epoch_1"]) {
-        listed += elevation_change({ch["kind"].get<std::string>(), {ch["centre_m"][0].get<double>(), ch["centre_m"][1].get<double>()},
-                                    {ch["size_m"][0].get<double>(), ch["size_m"][1].get<double>()}, ch["height_m"].get<double>()},
-                                   x, y);
-      }
+      for (const auto& ch : site["changes_since_epoch_1"]) listed += elevation_change(seabed_change_from_json(ch), x, y);
       if (listed != 0) continue;
       moved2 += t * t;
       still_max = std::max(still_max, std::abs(still.terrain.elevation(x, y) - first.terrain.elevation(x, y)));
