@@ -278,7 +278,22 @@ class HostileInputTableTest(unittest.TestCase):
             em122 = f.read()
         flipped = bytearray(em122)
         flipped[em122.index(b"\x02X") + 100] ^= 0x10  # inside the first XYZ 88 datagram's body
+        with open(os.path.join(os.environ["XTF_DATA"], "0009_150708_R2Testing_0001.xtf"), "rb") as f:
+            r2sonic = f.read()
+        first_ping = 1152  # the file's first bathymetry packet, after the 1024-byte header and a fix
+        lying = bytearray(r2sonic)
+        lying[first_ping + 10:first_ping + 14] = (100).to_bytes(4, "little")  # less than its own ping header
+        unknown = bytearray(r2sonic)
+        unknown[1024] = 0  # the first packet's magic number 0xFACE
         sonar_files = [
+            ("an .xtf file cut short", {"r2.xtf": r2sonic[:first_ping + 1000]},
+             r"[\s\S]*r2\.xtf:1152: NumBytesThisRecord: 2176 bytes run past the end of the file"),
+            ("an .xtf packet whose length lies", {"r2.xtf": bytes(lying)},
+             r"[\s\S]*r2\.xtf:1152: R2Sonic bathymetry packet ping header up to SensorYcoordinate: runs past the end"),
+            ("an .xtf packet without its magic number", {"r2.xtf": bytes(unknown)},
+             r"[\s\S]*r2\.xtf:1024: packet magic number: 0xFA00 is not 0xFACE"),
+            ("an .xtf file of another format's bytes", {"r2.xtf": b"\0" * 4096},
+             r"[\s\S]*r2\.xtf:0: file header FileFormat: 0 is not 123"),
             ("an .all file cut short", {"em122.all": em122[:100000]},
              r"[\s\S]*em122\.all:\d+: datagram length: \d+ bytes run past the end of the file"),
             ("an .all datagram with a wrong checksum", {"em122.all": bytes(flipped)},
