@@ -20,7 +20,7 @@ import sys
 def rows(path):
     for line in open(path):
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) < 15 or cells[0] in ("terrain", "---") or cells[0].startswith("-"):
+        if len(cells) < 15 or cells[0] in ("terrain", "variant", "---") or cells[0].startswith("-"):
             continue
         yield cells
 

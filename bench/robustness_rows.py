@@ -57,7 +57,8 @@ def edge_sigmas(error_sigmas):
 
 def summary(report):
     t = report["trajectory_error_m"]
-    c = report["consistency_error_m"]["optimized"]
+    # null where no cell is seen by two lines (report.json says why): no figure, no check on it
+    c = report["consistency_error_m"]["optimized"] or {"rmse": float("nan"), "p99": float("nan")}
     regs = report.get("registrations", [])
     accepted = [x for x in regs if x["accepted"]]
     loops = [x for x in accepted if x["type"] == "loop"]

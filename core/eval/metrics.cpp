@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
+#include <random>
 #include <unordered_map>
 
 #include <Eigen/Geometry>
@@ -100,21 +102,6 @@ ConsistencyReport report_of(std::vector<double> errors, const ConsistencyConfig&
   return report;
 }
 
-}  // namespace
-
-ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                    const ConsistencyConfig& config) {
-  std::unordered_map<uint64_t, Spread> per_cell;
-  for (const auto& [k, mean] : line_means(set, poses, config)) per_cell[k >> 20].add(mean);
-  std::vector<double> errors;
-  for (const auto& [cell, spread] : per_cell) {
-    if (spread.lines >= 2) errors.push_back(spread.hi - spread.lo);
-  }
-  return report_of(std::move(errors), config);
-}
-
-namespace {
-
 // The centre (map frame) of the cell of a cell_line_key shifted right by 20 (its two 20-bit indices).
 Eigen::Vector2d cell_centre(uint64_t cell, double cell_m) {
   const auto index = [](uint64_t bits) {  // sign-extended from 20 bits
@@ -124,7 +111,69 @@ Eigen::Vector2d cell_centre(uint64_t cell, double cell_m) {
   return {(static_cast<double>(index(cell >> 20)) + 0.5) * cell_m, (static_cast<double>(index(cell)) + 0.5) * cell_m};
 }
 
+// Per cell seen by two or more lines (keyed by its two 20-bit indices), the largest difference
+// between the lines' mean elevations there.
+std::unordered_map<uint64_t, double> cell_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                                 const ConsistencyConfig& config) {
+  std::unordered_map<uint64_t, Spread> per_cell;
+  for (const auto& [k, mean] : line_means(set, poses, config)) per_cell[k >> 20].add(mean);
+  std::unordered_map<uint64_t, double> errors;
+  for (const auto& [cell, spread] : per_cell) {
+    if (spread.lines >= 2) errors[cell] = spread.hi - spread.lo;
+  }
+  return errors;
+}
+
 }  // namespace
+
+ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                    const ConsistencyConfig& config) {
+  std::vector<double> errors;
+  for (const auto& [cell, error] : cell_errors(set, poses, config)) errors.push_back(error);
+  return report_of(std::move(errors), config);
+}
+
+double median_submap_side_m(const SubmapSet& set) {
+  std::vector<double> sides;
+  for (const Submap& s : set.submaps) {
+    const Eigen::AlignedBox2f box = s.extent.isEmpty() ? extent_of(s.points) : s.extent;
+    if (s.line >= 0 && !box.isEmpty()) sides.push_back(std::sqrt(static_cast<double>(box.volume())));
+  }
+  if (sides.empty()) return 0;
+  std::nth_element(sides.begin(), sides.begin() + sides.size() / 2, sides.end());
+  return sides[sides.size() / 2];
+}
+
+double p99_upper_by_blocks(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                           const ConsistencyConfig& config, double block_m, int replicates) {
+  std::map<uint64_t, std::vector<double>> by_block;  // ordered: the same survey, the same bound
+  for (const auto& [cell, error] : cell_errors(set, poses, config)) {
+    const Eigen::Vector2d c = cell_centre(cell, config.cell_m);
+    by_block[cell_line_key(static_cast<int64_t>(std::floor(c.x() / block_m)),
+                           static_cast<int64_t>(std::floor(c.y() / block_m)), 0)]
+        .push_back(error);
+  }
+  std::vector<const std::vector<double>*> blocks;
+  std::size_t cells = 0;
+  for (const auto& [key, errors] : by_block) blocks.push_back(&errors), cells += errors.size();
+  if (blocks.empty() || replicates < 1) return 0;
+  std::mt19937_64 random(blocks.size());
+  std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
+  std::vector<double> p99s, sample;
+  sample.reserve(2 * cells);
+  for (int r = 0; r < replicates; ++r) {
+    sample.clear();
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const auto& errors = *blocks[pick(random)];
+      sample.insert(sample.end(), errors.begin(), errors.end());
+    }
+    const auto rank = static_cast<std::ptrdiff_t>(std::floor(0.99 * static_cast<double>(sample.size() - 1)));
+    std::nth_element(sample.begin(), sample.begin() + rank, sample.end());
+    p99s.push_back(sample[rank]);
+  }
+  std::sort(p99s.begin(), p99s.end());
+  return p99s[static_cast<std::size_t>(std::ceil(0.99 * replicates)) - 1];
+}
 
 SiteConsistency site_consistency(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                  const ConsistencyConfig& config,

@@ -49,6 +49,19 @@ struct ConsistencyReport {
 // upper confidence bound of that quantile at `z` standard deviations of its rank.
 double quantile_upper_bound(const std::vector<double>& sorted, double p, double z);
 
+// The side of a square as large as the median submap's horizontal extent (0 for none): a
+// submap's soundings move together with its pose, so its cells' errors are not independent.
+double median_submap_side_m(const SubmapSet& set);
+
+// The one-sided 99 % upper confidence bound of the consistency p99 (consistency_error) when its
+// cells are not independent samples: the cells grouped into squares of `block_m`, the squares
+// drawn with replacement `replicates` times (a block bootstrap, deterministic for one survey),
+// the 99th percentile of the drawn p99s. Cells within a submap's extent share its pose error, so
+// the distribution-free bound of ConsistencyReport::p99_upper, which counts every cell as its own
+// sample, is far too tight for a whole map's tail.
+double p99_upper_by_blocks(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                           const ConsistencyConfig& config, double block_m, int replicates = 200);
+
 // Roman & Singh consistency: per cell seen by two or more lines, the largest difference between
 // the lines' mean elevations there. Submaps off the lines (turns) do not take part.
 ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,

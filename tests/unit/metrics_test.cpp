@@ -2,22 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/unit/submap_errors.h"
 #include "tests/unit/true_submaps.h"
 
 namespace bathyslam {
 namespace {
-
-// A submap of a flat patch: soundings every 0.25 m over `width` x `length` metres at `z`.
-Submap flat_patch(int index, int line, double x0, double y0, double width, double length, float z) {
-  Submap s;
-  s.index = index;
-  s.line = line;
-  s.dr_pose.translation() = Eigen::Vector3d(x0, y0, 0);
-  for (double x = 0.125; x < width; x += 0.25) {
-    for (double y = 0.125; y < length; y += 0.25) s.points.emplace_back(x, y, z);
-  }
-  return s;
-}
 
 // Line 0 covers x in [0, 20), line 1 covers x in [10, 30) half a metre deeper: they share
 // 10 x 20 cells of 1 m.
@@ -124,6 +113,26 @@ TEST(Metrics, TheP99sUpperBoundLiesJustAboveItByTheQuantilesOwnSamplingNoise) {
   const std::vector<double> few = {1, 2, 3};
   EXPECT_DOUBLE_EQ(quantile_upper_bound(few, 0.99, 2.33), 3.0) << "never past the largest";
   EXPECT_DOUBLE_EQ(quantile_upper_bound({}, 0.99, 2.33), 0.0);
+}
+
+// Where each cell's error is its own (sounding noise), drawing the cells in blocks bounds the p99
+// about as tightly as counting every cell; where a submap's cells move together (its pose error),
+// the p99 of another map of the same quality could lie much higher, and the blocks say so.
+TEST(Metrics, BlocksOfASubmapBoundTheP99ByWhatItsCorrelatedCellsAllow) {
+  const ConsistencyConfig config;
+  const SubmapSet independent = lines_with_submap_errors(0.0, 0.2, 1);
+  const ConsistencyReport own = consistency_error(independent, poses_of(independent), config);
+  const double own_blocks = p99_upper_by_blocks(independent, poses_of(independent), config, 20.0);
+  EXPECT_GE(own_blocks, own.stats.p99);
+  EXPECT_LT(own_blocks - own.stats.p99, 3 * (own.p99_upper - own.stats.p99) + 0.01);
+
+  const SubmapSet correlated = lines_with_submap_errors(0.1, 0.02, 1);
+  const ConsistencyReport moved = consistency_error(correlated, poses_of(correlated), config);
+  const double moved_blocks = p99_upper_by_blocks(correlated, poses_of(correlated), config, 20.0);
+  EXPECT_GT(moved_blocks - moved.stats.p99, 5 * (moved.p99_upper - moved.stats.p99)) << moved.stats.p99 << " " << moved.p99_upper << " " << moved_blocks << " " << moved.stats.max << " own " << own.stats.p99 << " " << own.p99_upper << " " << own_blocks;
+  EXPECT_LE(moved_blocks, moved.stats.max);
+  EXPECT_EQ(moved_blocks, p99_upper_by_blocks(correlated, poses_of(correlated), config, 20.0)) << "deterministic";
+  EXPECT_NEAR(median_submap_side_m(correlated), 20.0, 0.3);
 }
 
 }  // namespace

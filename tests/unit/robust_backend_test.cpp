@@ -6,6 +6,9 @@
 
 #include <random>
 
+#include "tests/unit/submap_errors.h"
+#include "tests/unit/true_submaps.h"
+
 namespace bathyslam {
 namespace {
 
@@ -194,6 +197,42 @@ TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
   fall_back_unless_more_consistent(beyond);
   EXPECT_TRUE(beyond.safety_net.fell_back);
   EXPECT_NE(beyond.safety_net.verdict.find("sampling noise"), std::string::npos) << beyond.safety_net.verdict;
+}
+
+// A map whose every submap is a little off (each its own pose error) has a p99 that another map
+// of the same quality could exceed by far more than the cells' own sampling says, because a
+// submap's cells move together (robustness.publish_rule 2, p99_upper_by_blocks). A solved map
+// whose RMSE fell and whose p99 rose within that is published; rule 1 refused it. A map with a
+// blunder (one submap a metre off) is refused by every rule.
+TEST(SafetyNet, WeighsTheP99RiseByTheSubmapsNotTheCells) {
+  PipelineResult r;
+  r.submaps = lines_with_submap_errors(0.1, 0.02, 1);
+  r.dr_poses = poses_of(r.submaps);
+  r.optimized_poses = r.dr_poses;
+  r.graph.poses = r.dr_poses;
+  r.safety_net.ran = true;
+  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, r.config.consistency);
+  const double blocks = p99_upper_by_blocks(r.submaps, r.dr_poses, r.config.consistency,
+                                            median_submap_side_m(r.submaps));
+  ASSERT_GT(blocks, r.dr_consistency.p99_upper);
+  r.consistency.stats.rmse = 0.8 * r.dr_consistency.stats.rmse;
+  r.consistency.stats.p99 = (r.dr_consistency.p99_upper + blocks) / 2;
+
+  PipelineResult by_blocks = r;
+  fall_back_unless_more_consistent(by_blocks);
+  EXPECT_FALSE(by_blocks.safety_net.fell_back) << by_blocks.safety_net.verdict;
+  PipelineResult by_cells = r;
+  by_cells.config.robustness.publish_rule = 1;
+  fall_back_unless_more_consistent(by_cells);
+  EXPECT_TRUE(by_cells.safety_net.fell_back);
+
+  PipelineResult blunder = r;
+  blunder.optimized_poses[40].translation().z() += 1.0;
+  blunder.consistency = consistency_error(blunder.submaps, blunder.optimized_poses, blunder.config.consistency);
+  blunder.consistency.stats.rmse = 0.8 * r.dr_consistency.stats.rmse;  // a better map elsewhere
+  fall_back_unless_more_consistent(blunder);
+  EXPECT_TRUE(blunder.safety_net.fell_back);
+  EXPECT_NE(blunder.safety_net.verdict.find("sampling noise"), std::string::npos) << blunder.safety_net.verdict;
 }
 
 // A probe result by hand: the answer fits at 1e-3 m², and every offset in `competing` fits
