@@ -97,9 +97,27 @@ void run_simulate(const SimulateOptions& o) {
   if (o.swath_deg) config.sonar.swath_deg = *o.swath_deg;
 
   const auto start = std::chrono::steady_clock::now();
-  const sim::Simulation simulation = sim::simulate(config);
-  if (o.format == "gsf") std::printf("wrote %s\n", write_gsf_survey(simulation.survey, o.out).c_str());
-  else write_bundle(simulation.survey, o.out);
+  // A bundle is written as the pings are made, so that a survey of any length simulates in the
+  // memory of a few thousand pings; GSF out holds the survey whole.
+  std::optional<sim::Simulation> made;
+  std::size_t pings_made = 0, soundings = 0;
+  if (o.format == "gsf") {
+    made = sim::simulate(config);
+    std::printf("wrote %s\n", write_gsf_survey(made->survey, o.out).c_str());
+    pings_made = made->survey.pings.size();
+    soundings = made->survey.beams.size();
+  } else {
+    std::filesystem::create_directories(o.out);
+    PingsCsvWriter pings(std::filesystem::path(o.out) / kPingsFile);
+    made = sim::simulate(config, [&](double time, std::span<const Beam> beams) {
+      pings.add(time, beams);
+      ++pings_made;
+      soundings += beams.size();
+    });
+    pings.commit();
+    write_bundle_without_pings(made->survey, o.out);
+  }
+  const sim::Simulation& simulation = *made;
   if (simulation.truth_change) write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -114,8 +132,7 @@ void run_simulate(const SimulateOptions& o) {
   if (o.altitude_m) {
     std::printf("  altitude %g m, %g pings a second\n", *o.altitude_m, s.metadata.sonar.value("ping_rate_hz", 0.0));
   }
-  std::printf("  %zu pings, %zu soundings, %zu navigation samples\n", s.pings.size(),
-              s.beams.size(), s.nav.size());
+  std::printf("  %zu pings, %zu soundings, %zu navigation samples\n", pings_made, soundings, s.nav.size());
   if (o.epoch > 0) {
     const auto& site = s.metadata.vehicle["simulation"]["site"];
     std::printf("  epoch %d of the site of seed %llu: start fix off by (%.2f, %.2f) m and %.2f deg, %zu seabed changes since epoch 1\n",
@@ -134,8 +151,8 @@ void run_simulate(const SimulateOptions& o) {
 void add_simulate_command(CLI::App& app) {
   auto options = std::make_shared<SimulateOptions>();
   CLI::App* cmd = app.add_subcommand("simulate", "Simulate a survey bundle with known truth");
-  cmd->add_option("--scenario", options->scenario, "small, lake or large")
-      ->check(CLI::IsMember({"small", "lake", "large"}))
+  cmd->add_option("--scenario", options->scenario, "small, lake, large or xlarge (four times large)")
+      ->check(CLI::IsMember({"small", "lake", "large", "xlarge"}))
       ->capture_default_str();
   cmd->add_option("--seed", options->seed, "random seed (same seed, same bytes)")
       ->capture_default_str();

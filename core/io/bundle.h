@@ -3,6 +3,7 @@
 // nav.csv, pings.csv and optionally reference_nav.csv. Reading validates everything and yields a Survey
 // only when there is no error; every problem names its file, line and field.
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -99,6 +100,26 @@ Survey load_bundle(const std::filesystem::path& bundle);
 // temporary name and renamed, so a reader never sees half a file. Numbers are written in their
 // shortest exact form: reading the bundle back gives the same values.
 void write_bundle(const Survey& survey, const std::filesystem::path& dir);
+
+// The same but pings.csv, which a PingsCsvWriter writes ping by ping (a survey too large to
+// hold: `bathyslam simulate` streams its pings).
+void write_bundle_without_pings(const Survey& survey, const std::filesystem::path& dir);
+
+class AtomicFileWriter;
+
+// pings.csv written as the pings come, atomically: under a temporary name until commit().
+class PingsCsvWriter {
+ public:
+  explicit PingsCsvWriter(const std::filesystem::path& path);
+  ~PingsCsvWriter();  // without commit(): the temporary file is removed
+  PingsCsvWriter(const PingsCsvWriter&) = delete;
+  PingsCsvWriter& operator=(const PingsCsvWriter&) = delete;
+  void add(double time, std::span<const Beam> beams);
+  void commit();
+
+ private:
+  std::unique_ptr<AtomicFileWriter> out_;
+};
 
 // Writes navigation in the nav.csv format (header and columns), atomically.
 void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::path& path);

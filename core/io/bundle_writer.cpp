@@ -8,7 +8,6 @@
 #include "core/io/file_bytes.h"
 
 namespace bathyslam {
-namespace {
 
 // A file written through a large buffer under "<name>.partial", renamed into place on commit().
 class AtomicFileWriter {
@@ -69,8 +68,6 @@ class AtomicFileWriter {
   std::string buffer_;
 };
 
-}  // namespace
-
 void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::path& path) {
   AtomicFileWriter out(path);
   out.text(kNavHeader);
@@ -86,33 +83,40 @@ void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::pat
   out.commit();
 }
 
-namespace {
-
-void write_pings(const Survey& survey, const std::filesystem::path& path) {
-  AtomicFileWriter out(path);
-  out.text(kPingsHeader);
-  out.end_line();
-  char time_text[32];
-  for (const Ping& ping : survey.pings) {
-    const auto [end, ec] = std::to_chars(time_text, time_text + sizeof time_text, ping.time);
-    const std::string_view time(time_text, end - time_text);
-    for (const Beam& beam : survey.beams_of(ping)) {
-      out.text(time);
-      out.separator(',');
-      out.number(beam.index);
-      for (float v : {beam.along, beam.across, beam.down}) {
-        out.separator(',');
-        out.number(v);
-      }
-      out.end_line();
-    }
-  }
-  out.commit();
+PingsCsvWriter::PingsCsvWriter(const std::filesystem::path& path) : out_(std::make_unique<AtomicFileWriter>(path)) {
+  out_->text(kPingsHeader);
+  out_->end_line();
 }
 
-}  // namespace
+PingsCsvWriter::~PingsCsvWriter() = default;
+
+void PingsCsvWriter::add(double time, std::span<const Beam> beams) {
+  char time_text[32];
+  const auto [end, ec] = std::to_chars(time_text, time_text + sizeof time_text, time);
+  const std::string_view time_field(time_text, end - time_text);
+  for (const Beam& beam : beams) {
+    out_->text(time_field);
+    out_->separator(',');
+    out_->number(beam.index);
+    for (float v : {beam.along, beam.across, beam.down}) {
+      out_->separator(',');
+      out_->number(v);
+    }
+    out_->end_line();
+  }
+}
+
+void PingsCsvWriter::commit() { out_->commit(); }
 
 void write_bundle(const Survey& survey, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  PingsCsvWriter pings(dir / kPingsFile);
+  for (const Ping& ping : survey.pings) pings.add(ping.time, survey.beams_of(ping));
+  pings.commit();
+  write_bundle_without_pings(survey, dir);
+}
+
+void write_bundle_without_pings(const Survey& survey, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   const nlohmann::json json = {{"name", survey.metadata.name},
                                {"crs", survey.metadata.crs},
@@ -123,7 +127,6 @@ void write_bundle(const Survey& survey, const std::filesystem::path& dir) {
   json_out.end_line();
   json_out.commit();
   write_nav_csv(survey.nav, dir / kNavFile);
-  write_pings(survey, dir / kPingsFile);
   if (survey.reference_nav) {
     write_nav_csv(*survey.reference_nav, dir / kReferenceNavFile);
   } else {

@@ -210,6 +210,17 @@ ChangeGrid change_since(const Terrain& before, const Terrain& after, const Area&
 }  // namespace
 
 Simulation simulate(const SimulationConfig& given) {
+  Survey kept;
+  Simulation sim = simulate(given, [&](double time, std::span<const Beam> beams) {
+    kept.pings.push_back({time, static_cast<uint32_t>(kept.beams.size()), static_cast<uint32_t>(beams.size())});
+    kept.beams.insert(kept.beams.end(), beams.begin(), beams.end());
+  });
+  sim.survey.pings = std::move(kept.pings);
+  sim.survey.beams = std::move(kept.beams);
+  return sim;
+}
+
+Simulation simulate(const SimulationConfig& given, const PingSink& sink) {
   SimulationConfig config = given;
   config.seed = epoch_seed(given);
   MotionConfig motion = config.motion;
@@ -263,27 +274,25 @@ Simulation simulate(const SimulationConfig& given) {
   std::vector<std::size_t> ping_steps;
   for (std::size_t i = lead + 1; i + lead < states.size(); i += ping_stride) ping_steps.push_back(i);
 
-  // Each ping draws from its own stream: the same bytes whatever the thread count.
-  std::vector<std::vector<Beam>> beams_per_ping(ping_steps.size());
+  // Each ping draws from its own stream: the same bytes whatever the thread count. Made a block
+  // at a time, in parallel within it, and given to the sink in order.
+  constexpr std::size_t kBlock = 4096;
+  std::vector<std::vector<Beam>> beams_per_ping(kBlock);
+  for (std::size_t first = 0; first < ping_steps.size(); first += kBlock) {
+    const std::size_t count = std::min(kBlock, ping_steps.size() - first);
 #pragma omp parallel for schedule(dynamic, 64)
-  for (std::size_t k = 0; k < ping_steps.size(); ++k) {
-    const VehicleState& v = states[ping_steps[k]];
-    auto rng = make_rng(config.seed, kSonarNoiseStream, k);
-    const Eigen::Isometry3d pose = vehicle_pose(
-        {v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg}, LocalOrigin{});
-    beams_per_ping[k] = ping(sim.terrain, pose, sonar, rng);
-  }
-  std::size_t total = 0;
-  for (const auto& b : beams_per_ping) total += b.size();
-  survey.beams.reserve(total);
-  for (std::size_t k = 0; k < ping_steps.size(); ++k) {
-    survey.pings.push_back({states[ping_steps[k]].time, static_cast<uint32_t>(survey.beams.size()),
-                            static_cast<uint32_t>(beams_per_ping[k].size())});
-    survey.beams.insert(survey.beams.end(), beams_per_ping[k].begin(), beams_per_ping[k].end());
-    std::vector<Beam>().swap(beams_per_ping[k]);
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::size_t k = first + j;
+      const VehicleState& v = states[ping_steps[k]];
+      auto rng = make_rng(config.seed, kSonarNoiseStream, k);
+      const Eigen::Isometry3d pose = vehicle_pose(
+          {v.time, v.x, v.y, v.depth_m, v.roll_deg, v.pitch_deg, v.heading_deg}, LocalOrigin{});
+      beams_per_ping[j] = ping(sim.terrain, pose, sonar, rng);
+    }
+    for (std::size_t j = 0; j < count; ++j) sink(states[ping_steps[first + j]].time, beams_per_ping[j]);
   }
 
-  survey.nav = dead_reckoning(config, sonar, truth, survey.pings.front().time, sim);
+  survey.nav = dead_reckoning(config, sonar, truth, states[ping_steps.front()].time, sim);
   start_from_fix(survey.nav, start_fix_error(given.seed, config.epoch));
   sim.drift = drift_stats(survey.nav, truth);
   survey.reference_nav = std::move(truth);

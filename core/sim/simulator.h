@@ -1,7 +1,9 @@
 #pragma once
 // `bathyslam simulate`: a survey with known truth, deterministic from its seed.
 #include <cstdint>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "core/sim/drift.h"
@@ -69,6 +71,12 @@ struct Simulation {
 };
 
 Simulation simulate(const SimulationConfig& config);
+
+// The same with each ping given to `sink` in time order as it is made, and none kept in the
+// survey (its `pings` and `beams` stay empty): memory stays that of a few thousand pings however
+// long the survey. The pings, their beams and every other field are those simulate() gives.
+using PingSink = std::function<void(double time, std::span<const Beam> beams)>;
+Simulation simulate(const SimulationConfig& config, const PingSink& sink);
 
 // The fastest a sonar can ping when the echo of its outermost beam must be back first: two slant
 // ranges at 1500 m/s.

@@ -30,6 +30,8 @@ PatternSize pattern_size(Scenario scenario) {
     case Scenario::kSmall: return {4, 100.0, 30.0, 2, 110.0};
     // Ten times the area: the lake pattern scaled by sqrt(10) in both directions.
     case Scenario::kLarge: return {22, 2334.0, 30.0, 9, 930.0};
+    // Four times `large` (issue 35's scaling curve): its pattern doubled in both directions.
+    case Scenario::kXLarge: return {44, 4668.0, 30.0, 18, 1860.0};
   }
   throw std::invalid_argument("unknown scenario");
 }
@@ -53,7 +55,8 @@ Scenario parse_scenario(const std::string& name) {
   if (name == "small") return Scenario::kSmall;
   if (name == "lake") return Scenario::kLake;
   if (name == "large") return Scenario::kLarge;
-  throw std::invalid_argument("unknown scenario '" + name + "' (expected small, lake or large)");
+  if (name == "xlarge") return Scenario::kXLarge;
+  throw std::invalid_argument("unknown scenario '" + name + "' (expected small, lake, large or xlarge)");
 }
 
 std::string to_string(Scenario scenario) {
@@ -61,6 +64,7 @@ std::string to_string(Scenario scenario) {
     case Scenario::kSmall: return "small";
     case Scenario::kLake: return "lake";
     case Scenario::kLarge: return "large";
+    case Scenario::kXLarge: return "xlarge";
   }
   return "?";
 }

@@ -13,7 +13,7 @@
 
 namespace bathyslam::sim {
 
-enum class Scenario { kSmall, kLake, kLarge };
+enum class Scenario { kSmall, kLake, kLarge, kXLarge };
 
 Scenario parse_scenario(const std::string& name);  // throws std::invalid_argument
 std::string to_string(Scenario scenario);

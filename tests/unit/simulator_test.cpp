@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -63,6 +64,39 @@ TEST_F(SmallScenario, SameSeedSameBytesDifferentSeedDifferentSurvey) {
   EXPECT_NE(file_bytes(a / kPingsFile), file_bytes(c / kPingsFile));
   EXPECT_NE(file_bytes(a / kNavFile), file_bytes(c / kNavFile));
   for (const auto& d : {a, b, c}) fs::remove_all(d);
+}
+
+// `bathyslam simulate` streams: each ping goes to the sink in time order as it is made (the small
+// survey spans two blocks of pings), the survey keeps none, and the bundle written ping by ping
+// is the bundle of the survey made whole, byte for byte.
+TEST_F(SmallScenario, StreamedPingsMakeTheSameBundleAndAreNotKept) {
+  const fs::path whole = fs::temp_directory_path() / "bathyslam_sim_whole";
+  const fs::path streamed = fs::temp_directory_path() / "bathyslam_sim_streamed";
+  write_bundle(simulation_->survey, whole);
+  fs::create_directories(streamed);
+  SimulationConfig config;
+  config.seed = 11;
+  std::size_t pings = 0;
+  double last_time = -INFINITY;
+  bool in_order = true;
+  PingsCsvWriter writer(streamed / kPingsFile);
+  const Simulation made = simulate(config, [&](double time, std::span<const Beam> beams) {
+    in_order = in_order && time > last_time;
+    last_time = time;
+    ++pings;
+    writer.add(time, beams);
+  });
+  writer.commit();
+  write_bundle_without_pings(made.survey, streamed);
+  EXPECT_TRUE(in_order);
+  EXPECT_EQ(pings, simulation_->survey.pings.size());
+  EXPECT_GT(pings, 4096u);  // more than one block
+  EXPECT_TRUE(made.survey.pings.empty());
+  EXPECT_TRUE(made.survey.beams.empty());
+  for (auto file : {kSurveyJsonFile, kNavFile, kPingsFile, kReferenceNavFile}) {
+    EXPECT_EQ(file_bytes(whole / file), file_bytes(streamed / file)) << file;
+  }
+  for (const auto& d : {whole, streamed}) fs::remove_all(d);
 }
 
 TEST_F(SmallScenario, BundleReadsBackValid) {
