@@ -88,6 +88,8 @@ def checks(s, odometry, gicp=None):
     failed = []
     if s["traj"] > 1.05 * odometry["traj"]:
         failed.append("worse-traj")
+    if math.isnan(s["cons"]):
+        failed.append("no-cons")  # nothing to compare: not a pass
     if s["cons"] > odometry["cons"] + 0.001:
         failed.append("worse-cons")
     if s["worst_loop"][0] > 2.0 or s["worst_loop"][1] > 2.0:

@@ -52,7 +52,8 @@ for variant in "${variants[@]}"; do
       reports=()
       for config in $configs; do
         out=$bundle-$config$tag
-        "$bathyslam" process "$bundle" --config "$config" --out "$out" "${set_args[@]}" >/dev/null 2>&1
+        "$bathyslam" process "$bundle" --config "$config" --out "$out" "${set_args[@]}" > "$out.log" 2>&1 ||
+          { echo "failed: $config on $bundle; see $out.log" >&2; exit 1; }
         reports+=("$config=$out/report.json")
       done
       python3 bench/robustness_rows.py "$name" "$drift" "$seed" "${reports[@]}"

@@ -115,10 +115,13 @@ void run_simulate(const SimulateOptions& o) {
       soundings += beams.size();
     });
     pings.commit();
+    if (made->truth_change) write_truth_change(*made->truth_change, made->survey.metadata.crs, o.out);
     write_bundle_without_pings(made->survey, o.out);
   }
   const sim::Simulation& simulation = *made;
-  if (simulation.truth_change) write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
+  if (o.format == "gsf" && simulation.truth_change) {
+    write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

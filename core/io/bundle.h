@@ -102,10 +102,13 @@ Survey load_bundle(const std::filesystem::path& bundle);
 void write_bundle(const Survey& survey, const std::filesystem::path& dir);
 
 // The same but pings.csv, which a PingsCsvWriter writes ping by ping (a survey too large to
-// hold: `bathyslam simulate` streams its pings).
+// hold: `bathyslam simulate` streams its pings). survey.json comes last: with it, the bundle is
+// whole.
 void write_bundle_without_pings(const Survey& survey, const std::filesystem::path& dir);
 
+namespace detail {
 class AtomicFileWriter;
+}
 
 // pings.csv written as the pings come, atomically: under a temporary name until commit().
 class PingsCsvWriter {
@@ -118,7 +121,7 @@ class PingsCsvWriter {
   void commit();
 
  private:
-  std::unique_ptr<AtomicFileWriter> out_;
+  std::unique_ptr<detail::AtomicFileWriter> out_;
 };
 
 // Writes navigation in the nav.csv format (header and columns), atomically.

@@ -8,6 +8,7 @@
 #include "core/io/file_bytes.h"
 
 namespace bathyslam {
+namespace detail {
 
 // A file written through a large buffer under "<name>.partial", renamed into place on commit().
 class AtomicFileWriter {
@@ -21,13 +22,15 @@ class AtomicFileWriter {
   ~AtomicFileWriter() {
     if (file_ != nullptr) {
       std::fclose(file_);
-      std::filesystem::remove(partial_);
+      std::error_code ignored;  // a destructor must not throw; the partial file is only left behind
+      std::filesystem::remove(partial_, ignored);
     }
   }
   AtomicFileWriter(const AtomicFileWriter&) = delete;
   AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
 
   void text(std::string_view s) {
+    if (file_ == nullptr) throw std::logic_error(path_.string() + ": written after commit");
     buffer_.append(s);
     if (buffer_.size() >= kFlushAt) flush();
   }
@@ -44,6 +47,7 @@ class AtomicFileWriter {
   }
 
   void commit() {
+    if (file_ == nullptr) throw std::logic_error(path_.string() + ": committed twice");
     flush();
     if (std::fclose(file_) != 0) {
       file_ = nullptr;
@@ -67,6 +71,10 @@ class AtomicFileWriter {
   std::FILE* file_ = nullptr;
   std::string buffer_;
 };
+
+}  // namespace detail
+
+using detail::AtomicFileWriter;
 
 void write_nav_csv(const std::vector<NavSample>& nav, const std::filesystem::path& path) {
   AtomicFileWriter out(path);
@@ -118,6 +126,13 @@ void write_bundle(const Survey& survey, const std::filesystem::path& dir) {
 
 void write_bundle_without_pings(const Survey& survey, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
+  write_nav_csv(survey.nav, dir / kNavFile);
+  if (survey.reference_nav) {
+    write_nav_csv(*survey.reference_nav, dir / kReferenceNavFile);
+  } else {
+    std::filesystem::remove(dir / kReferenceNavFile);
+  }
+  // Last: a bundle with its survey.json is whole (scripts that reuse bundles look for it).
   const nlohmann::json json = {{"name", survey.metadata.name},
                                {"crs", survey.metadata.crs},
                                {"sonar", survey.metadata.sonar},
@@ -126,12 +141,6 @@ void write_bundle_without_pings(const Survey& survey, const std::filesystem::pat
   json_out.text(json.dump(2));
   json_out.end_line();
   json_out.commit();
-  write_nav_csv(survey.nav, dir / kNavFile);
-  if (survey.reference_nav) {
-    write_nav_csv(*survey.reference_nav, dir / kReferenceNavFile);
-  } else {
-    std::filesystem::remove(dir / kReferenceNavFile);
-  }
 }
 
 }  // namespace bathyslam

@@ -255,7 +255,7 @@ namespace {
 
 // How high dead reckoning's p99 could be by the sampling of its cells alone (publish_rule).
 // The block bootstrap re-reads the map, so it runs only where the cheaper bound would refuse.
-double p99_bound(const PipelineResult& r, double solved_p99) {
+double dr_p99_bound(const PipelineResult& r, double solved_p99) {
   const ConsistencyReport& dr = r.dr_consistency;
   const int rule = r.config.robustness.publish_rule;
   if (rule == 0) return dr.stats.p99;
@@ -272,7 +272,7 @@ void fall_back_unless_more_consistent(PipelineResult& r) {
   const ErrorStats &solved = r.consistency.stats, &dr = r.dr_consistency.stats;
   const bool whole_map = r.config.robustness.publish_rule >= 1;
   if (solved.rmse <= dr.rmse && solved.p99 <= dr.p99) return;
-  const double p99_bound = solved.rmse <= dr.rmse ? bathyslam::p99_bound(r, solved.p99) : dr.p99;
+  const double p99_bound = solved.rmse <= dr.rmse ? dr_p99_bound(r, solved.p99) : dr.p99;
   if (solved.rmse <= dr.rmse && solved.p99 <= p99_bound) return;
   r.safety_net.pass = false;
   r.safety_net.fell_back = true;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "core/sim/random.h"
@@ -212,6 +213,9 @@ ChangeGrid change_since(const Terrain& before, const Terrain& after, const Area&
 Simulation simulate(const SimulationConfig& given) {
   Survey kept;
   Simulation sim = simulate(given, [&](double time, std::span<const Beam> beams) {
+    // Pings index their beams in 32 bits: a survey of more is simulated streamed only.
+    if (kept.beams.size() + beams.size() > std::numeric_limits<uint32_t>::max())
+      throw std::length_error("a survey of more than 2^32 soundings cannot be held whole: simulate it streamed");
     kept.pings.push_back({time, static_cast<uint32_t>(kept.beams.size()), static_cast<uint32_t>(beams.size())});
     kept.beams.insert(kept.beams.end(), beams.begin(), beams.end());
   });
@@ -273,6 +277,7 @@ Simulation simulate(const SimulationConfig& given, const PingSink& sink) {
       navigation_of(states, nav_stride, config.origin_easting, config.origin_northing);
   std::vector<std::size_t> ping_steps;
   for (std::size_t i = lead + 1; i + lead < states.size(); i += ping_stride) ping_steps.push_back(i);
+  if (ping_steps.empty()) throw std::invalid_argument("the survey pattern is too short for a single ping");
 
   // Each ping draws from its own stream: the same bytes whatever the thread count. Made a block
   // at a time, in parallel within it, and given to the sink in order.

@@ -73,8 +73,9 @@ struct Simulation {
 Simulation simulate(const SimulationConfig& config);
 
 // The same with each ping given to `sink` in time order as it is made, and none kept in the
-// survey (its `pings` and `beams` stay empty): memory stays that of a few thousand pings however
-// long the survey. The pings, their beams and every other field are those simulate() gives.
+// survey (its `pings` and `beams` stay empty): the pings take the memory of a few thousand
+// however long the survey (the seabed grid still grows with its area). The pings, their beams
+// and every other field are those simulate() gives.
 using PingSink = std::function<void(double time, std::span<const Beam> beams)>;
 Simulation simulate(const SimulationConfig& config, const PingSink& sink);
 

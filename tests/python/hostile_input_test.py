@@ -280,7 +280,7 @@ class HostileInputTableTest(unittest.TestCase):
         flipped[em122.index(b"\x02X") + 100] ^= 0x10  # inside the first XYZ 88 datagram's body
         with open(os.path.join(os.environ["XTF_DATA"], "0009_150708_R2Testing_0001.xtf"), "rb") as f:
             r2sonic = f.read()
-        first_ping = 1152  # the file's first bathymetry packet, after the 1024-byte header and a fix
+        first_ping = 1152  # the first bathymetry packet, after the 1024-byte header, a fix and an attitude packet
         lying = bytearray(r2sonic)
         lying[first_ping + 10:first_ping + 14] = (100).to_bytes(4, "little")  # less than its own ping header
         unknown = bytearray(r2sonic)

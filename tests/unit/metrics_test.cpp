@@ -135,5 +135,22 @@ TEST(Metrics, BlocksOfASubmapBoundTheP99ByWhatItsCorrelatedCellsAllow) {
   EXPECT_NEAR(median_submap_side_m(correlated), 20.0, 0.3);
 }
 
+// Worked by hand: one block is all any draw can give, so the bound is that block's p99; blocks
+// alike give the p99 itself; nothing to draw gives 0.
+TEST(Metrics, TheBlockBoundOfOneBlockOrOfBlocksAlikeIsTheP99) {
+  const ConsistencyConfig config;
+  SubmapSet one;
+  one.lines.resize(2);
+  one.submaps.push_back(flat_patch(0, 0, 0, 0, 10, 10, -10.0f));
+  one.submaps.push_back(flat_patch(1, 1, 0, 0, 10, 10, -10.25f));  // 100 cells 0.25 m apart
+  const double p99 = consistency_error(one, poses_of(one), config).stats.p99;
+  EXPECT_NEAR(p99, 0.25, 1e-5);
+  EXPECT_EQ(p99_upper_by_blocks(one, poses_of(one), config, 100.0), p99);
+  EXPECT_EQ(p99_upper_by_blocks(one, poses_of(one), config, 5.0), p99) << "four blocks alike";
+  EXPECT_EQ(p99_upper_by_blocks(one, poses_of(one), config, 100.0, 0), 0.0);
+  EXPECT_EQ(p99_upper_by_blocks(SubmapSet{}, {}, config, 100.0), 0.0);
+  EXPECT_EQ(median_submap_side_m(SubmapSet{}), 0.0);
+}
+
 }  // namespace
 }  // namespace bathyslam

@@ -168,7 +168,7 @@ TEST(SafetyNet, PublishesDeadReckoningWhenTheSolvedMapIsLessConsistent) {
   EXPECT_DOUBLE_EQ(r.consistency.stats.rmse, 0.30);
 }
 
-// The solved map is judged as a whole (robustness.publish_rule 1): a p99 a little above dead
+// The solved map is judged as a whole (robustness.publish_rule 1, each cell its own sample): a p99 a little above dead
 // reckoning's but within what the sampling of its cells allows does not throw away a map whose
 // RMSE fell by a third; beyond that bound, or under the old rule, dead reckoning is published.
 TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
@@ -182,6 +182,7 @@ TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
   r.dr_consistency.p99_upper = 0.97;
   r.consistency.stats.rmse = 0.20;
   r.consistency.stats.p99 = 0.93;
+  r.config.robustness.publish_rule = 1;
   PipelineResult whole = r;
   fall_back_unless_more_consistent(whole);
   EXPECT_FALSE(whole.safety_net.fell_back) << whole.safety_net.verdict;
@@ -226,6 +227,7 @@ TEST(SafetyNet, WeighsTheP99RiseByTheSubmapsNotTheCells) {
   fall_back_unless_more_consistent(by_cells);
   EXPECT_TRUE(by_cells.safety_net.fell_back);
 
+  // Its bound is dead reckoning's map's: the blunder's own map, drawn in blocks, would allow it.
   PipelineResult blunder = r;
   blunder.optimized_poses[40].translation().z() += 1.0;
   blunder.consistency = consistency_error(blunder.submaps, blunder.optimized_poses, blunder.config.consistency);
