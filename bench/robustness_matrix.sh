@@ -7,18 +7,21 @@
 #   bench/robustness_matrix.sh [--scenario small] [--terrains "..."] [--drifts "..."]
 #                              [--seeds "1 2 3"] [--configs "odometry gicp mchs"] [--work DIR]
 #                              [--set "key=value ..."] [--tag NAME] [--floor] [--altitude M]
+#                              [--simulate "ARGS"] [--label NAME]
 # --floor adds a `floor` row per bundle: the observable floor (bench_oracle_graph --observable),
 # every candidate pair at the truth with the information its overlap supports, and an
 # `identifiable` row: the same where dead reckoning rules out every alias of the truth
 # (bench_oracle_graph --identifiable). --altitude flies
-# the sonar that high, the world scaled with it (simulate --altitude; issue 38).
+# the sonar that high, the world scaled with it (simulate --altitude; issue 38). --simulate adds
+# arguments to every simulate (a seabed or sonar the defaults do not make), and --label names the
+# rows and bundles in place of the terrain (bench/unseen_seabeds.sh).
 # bench/matrix_summary.py turns the rows into means per terrain and drift with issue 31's checks.
 # Bundles go under DIR (default /tmp/bathyslam-robust) and are reused when present; each bundle
 # is deleted after its runs unless --keep is given (a `small` bundle is ~60 MB).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenario=small seeds="1 2 3" configs="odometry gicp mchs" work=/tmp/bathyslam-robust sets="" tag="" keep=0 floor=0
-altitude_args=() altitude_tag=""
+altitude_args=() altitude_tag="" simulate_args=() label=""
 terrains="lake sandwaves boulders channel slopebreak flat mixed"
 drifts="paper dvl heading-walk compass-step"
 while [[ $# -gt 0 ]]; do
@@ -34,6 +37,8 @@ while [[ $# -gt 0 ]]; do
     --keep) keep=1; shift ;;
     --floor) floor=1; shift ;;
     --altitude) altitude_args=(--altitude "$2"); altitude_tag=-altitude$2; shift 2 ;;
+    --simulate) read -ra simulate_args <<< "$2"; shift 2 ;;
+    --label) label=$2; shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -48,10 +53,11 @@ echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for terrain in $terrains; do
   for drift in $drifts; do
     for seed in $seeds; do
-      bundle=$work/$scenario$altitude_tag-$terrain-$drift-$seed
+      row=${label:-$terrain}
+      bundle=$work/$scenario$altitude_tag-$row-$drift-$seed
       [[ -f $bundle/survey.json ]] ||
         "$bathyslam" simulate --scenario "$scenario" --terrain "$terrain" --drift "$drift" --seed "$seed" \
-          "${altitude_args[@]}" --out "$bundle" >/dev/null
+          "${altitude_args[@]}" "${simulate_args[@]}" --out "$bundle" >/dev/null
       reports=()
       for config in $configs; do
         out=$bundle-$config$tag
@@ -67,7 +73,7 @@ for terrain in $terrains; do
           reports+=("$name=$bundle-$name.json")
         done
       fi
-      python3 bench/robustness_rows.py "$terrain" "$drift" "$seed" "${reports[@]}"
+      python3 bench/robustness_rows.py "$row" "$drift" "$seed" "${reports[@]}"
       [[ $keep == 1 ]] || rm -rf "$bundle"
     done
   done

@@ -101,12 +101,8 @@ void run_simulate(const SimulateOptions& o) {
   // memory of a few thousand pings; GSF out holds the survey whole.
   std::optional<sim::Simulation> made;
   std::size_t pings_made = 0, soundings = 0;
-  if (o.format == "gsf") {
-    made = sim::simulate(config);
-    std::printf("wrote %s\n", write_gsf_survey(made->survey, o.out).c_str());
-    pings_made = made->survey.pings.size();
-    soundings = made->survey.beams.size();
-  } else {
+  const bool bundle = o.format != "gsf";
+  if (bundle) {
     std::filesystem::create_directories(o.out);
     PingsCsvWriter pings(std::filesystem::path(o.out) / kPingsFile);
     made = sim::simulate(config, [&](double time, std::span<const Beam> beams) {
@@ -115,13 +111,15 @@ void run_simulate(const SimulateOptions& o) {
       soundings += beams.size();
     });
     pings.commit();
-    if (made->truth_change) write_truth_change(*made->truth_change, made->survey.metadata.crs, o.out);
-    write_bundle_without_pings(made->survey, o.out);
+  } else {
+    made = sim::simulate(config);
+    std::printf("wrote %s\n", write_gsf_survey(made->survey, o.out).c_str());
+    pings_made = made->survey.pings.size();
+    soundings = made->survey.beams.size();
   }
   const sim::Simulation& simulation = *made;
-  if (o.format == "gsf" && simulation.truth_change) {
-    write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
-  }
+  if (simulation.truth_change) write_truth_change(*simulation.truth_change, simulation.survey.metadata.crs, o.out);
+  if (bundle) write_bundle_without_pings(simulation.survey, o.out);  // survey.json last: the bundle is whole
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

@@ -111,15 +111,20 @@ Eigen::Vector2d cell_centre(uint64_t cell, double cell_m) {
   return {(static_cast<double>(index(cell >> 20)) + 0.5) * cell_m, (static_cast<double>(index(cell)) + 0.5) * cell_m};
 }
 
-// Per cell seen by two or more lines (keyed by its two 20-bit indices), the largest difference
-// between the lines' mean elevations there.
-std::unordered_map<uint64_t, double> cell_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
-                                                 const ConsistencyConfig& config) {
+struct CellError {
+  uint64_t cell;  // its two 20-bit indices
+  double error;
+};
+
+// Per cell seen by two or more lines, the largest difference between the lines' mean elevations
+// there.
+std::vector<CellError> cell_errors(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
+                                   const ConsistencyConfig& config) {
   std::unordered_map<uint64_t, Spread> per_cell;
   for (const auto& [k, mean] : line_means(set, poses, config)) per_cell[k >> 20].add(mean);
-  std::unordered_map<uint64_t, double> errors;
+  std::vector<CellError> errors;
   for (const auto& [cell, spread] : per_cell) {
-    if (spread.lines >= 2) errors[cell] = spread.hi - spread.lo;
+    if (spread.lines >= 2) errors.push_back({cell, spread.hi - spread.lo});
   }
   return errors;
 }
@@ -129,7 +134,7 @@ std::unordered_map<uint64_t, double> cell_errors(const SubmapSet& set, const std
 ConsistencyReport consistency_error(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                                     const ConsistencyConfig& config) {
   std::vector<double> errors;
-  for (const auto& [cell, error] : cell_errors(set, poses, config)) errors.push_back(error);
+  for (const CellError& e : cell_errors(set, poses, config)) errors.push_back(e.error);
   return report_of(std::move(errors), config);
 }
 
@@ -147,11 +152,11 @@ double median_submap_side_m(const SubmapSet& set) {
 double p99_upper_by_blocks(const SubmapSet& set, const std::vector<Eigen::Isometry3d>& poses,
                            const ConsistencyConfig& config, double block_m, int replicates) {
   std::map<uint64_t, std::vector<double>> by_block;  // ordered: the same survey, the same bound
-  for (const auto& [cell, error] : cell_errors(set, poses, config)) {
-    const Eigen::Vector2d c = cell_centre(cell, config.cell_m);
+  for (const CellError& e : cell_errors(set, poses, config)) {
+    const Eigen::Vector2d c = cell_centre(e.cell, config.cell_m);
     by_block[cell_line_key(static_cast<int64_t>(std::floor(c.x() / block_m)),
                            static_cast<int64_t>(std::floor(c.y() / block_m)), 0)]
-        .push_back(error);
+        .push_back(e.error);
   }
   std::vector<const std::vector<double>*> blocks;
   std::size_t cells = 0;

@@ -271,15 +271,15 @@ double dr_p99_bound(const PipelineResult& r, double solved_p99) {
 void fall_back_unless_more_consistent(PipelineResult& r) {
   const ErrorStats &solved = r.consistency.stats, &dr = r.dr_consistency.stats;
   const bool whole_map = r.config.robustness.publish_rule >= 1;
-  if (solved.rmse <= dr.rmse && solved.p99 <= dr.p99) return;
-  const double p99_bound = solved.rmse <= dr.rmse ? dr_p99_bound(r, solved.p99) : dr.p99;
-  if (solved.rmse <= dr.rmse && solved.p99 <= p99_bound) return;
+  const bool rmse_no_higher = solved.rmse <= dr.rmse;
+  const double p99_bound = rmse_no_higher ? dr_p99_bound(r, solved.p99) : dr.p99;
+  if (rmse_no_higher && solved.p99 <= p99_bound) return;
   r.safety_net.pass = false;
   r.safety_net.fell_back = true;
   r.safety_net.verdict = format("FAILED: the solved map agrees with itself less than dead reckoning's (consistency RMSE %.3f m "
                                 "against %.3f m, p99 %.3f m against %.3f m%s): published dead reckoning instead",
                                 solved.rmse, dr.rmse, solved.p99, dr.p99,
-                                whole_map && solved.rmse <= dr.rmse
+                                whole_map && rmse_no_higher
                                     ? format(", at most %.3f m within its sampling noise", p99_bound).c_str()
                                     : "");
   publish_dead_reckoning(r);

@@ -71,8 +71,9 @@ void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config);
 // than dead reckoning's does as a whole: its consistency RMSE over the cells two lines share no
 // higher, and its p99 no higher than dead reckoning's could be by the sampling of its cells alone
 // (robustness.publish_rule 2: the cells drawn in blocks of a submap, p99_upper_by_blocks; 1: each
-// cell on its own, ConsistencyReport::p99_upper; 0: no higher than dead reckoning's p99). Otherwise the data do not support the solution, and dead reckoning is published, the
-// report saying why.
+// cell on its own, ConsistencyReport::p99_upper; 0: no higher than dead reckoning's p99).
+// Otherwise the data do not support the solution, and dead reckoning is published, the report
+// saying why.
 // `r.consistency` and `r.dr_consistency` must be filled; the first is replaced on a fall-back.
 void fall_back_unless_more_consistent(PipelineResult& r);
 
