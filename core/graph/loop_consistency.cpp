@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 namespace bathyslam {
 namespace {
@@ -179,23 +180,38 @@ double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const D
   return mahalanobis2_xy_yaw(pose_difference(cycle.pose, Eigen::Isometry3d::Identity()), cycle.covariance);
 }
 
-int PairDistances::slot(int id) {
-  if (id >= static_cast<int>(slot_of_id_.size())) slot_of_id_.resize(id + 1, -1);
-  if (slot_of_id_[id] < 0) {
-    slot_of_id_[id] = static_cast<int>(rows_.size());
-    rows_.emplace_back();
+int KnownConflicts::slot(const LoopCandidate& loop, const DrNoiseModel& dr, double pair_chi2_threshold) {
+  if (loop.id >= static_cast<int>(slot_of_id_.size())) slot_of_id_.resize(loop.id + 1, -1);
+  int& slot = slot_of_id_[loop.id];
+  if (slot >= 0) return slot;
+  slot = static_cast<int>(loops_.size());
+  std::vector<int> conflicts;
+  for (int earlier = 0; earlier < slot; ++earlier) {
+    if (pair_mahalanobis2(loops_[earlier], loop, dr) > pair_chi2_threshold) conflicts.push_back(earlier);
   }
-  return slot_of_id_[id];
+  loops_.push_back(loop);
+  conflicts_.push_back(std::move(conflicts));
+  return slot;
 }
 
-double PairDistances::operator()(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr) {
-  if (i.id < 0 || j.id < 0 || i.id == j.id) return pair_mahalanobis2(i, j, dr);
-  const int a = slot(i.id), b = slot(j.id);
-  std::vector<double>& row = rows_[std::max(a, b)];
-  const int column = std::min(a, b);
-  if (static_cast<int>(row.size()) <= column) row.resize(column + 1, std::numeric_limits<double>::quiet_NaN());
-  if (std::isnan(row[column])) row[column] = pair_mahalanobis2(i, j, dr);
-  return row[column];
+std::vector<std::pair<int, int>> KnownConflicts::among(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
+                                                       double pair_chi2_threshold) {
+  std::vector<int> index_of_slot;  // -1: not among `loops`
+  std::vector<int> slots;
+  for (const LoopCandidate& loop : loops) {
+    if (loop.id < 0) throw std::invalid_argument("KnownConflicts: a loop without an id");
+    slots.push_back(slot(loop, dr, pair_chi2_threshold));
+  }
+  index_of_slot.assign(loops_.size(), -1);
+  for (std::size_t k = 0; k < slots.size(); ++k) index_of_slot[slots[k]] = static_cast<int>(k);
+  std::vector<std::pair<int, int>> pairs;
+  for (std::size_t k = 0; k < slots.size(); ++k) {
+    for (int earlier : conflicts_[slots[k]]) {
+      const int other = index_of_slot[earlier];
+      if (other >= 0) pairs.emplace_back(std::min<int>(other, k), std::max<int>(other, k));
+    }
+  }
+  return pairs;
 }
 
 Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices, long max_steps) {
@@ -220,8 +236,44 @@ Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices, long m
   return clique;
 }
 
+Clique maximum_clique_missing(int n, const std::vector<std::pair<int, int>>& missing, int max_exact_vertices,
+                              long max_steps) {
+  std::vector<int> parent(n);  // union-find over the missing edges
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto root = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const auto& [a, b] : missing) parent[root(a)] = root(b);
+  std::vector<std::vector<int>> group(n);  // by root: its vertices, ascending
+  std::vector<int> place(n);               // a vertex's place in its group
+  for (int v = 0; v < n; ++v) {
+    std::vector<int>& g = group[root(v)];
+    place[v] = static_cast<int>(g.size());
+    g.push_back(v);
+  }
+  std::vector<std::vector<std::pair<int, int>>> missing_in(n);  // by root
+  for (const auto& [a, b] : missing) missing_in[root(a)].emplace_back(place[a], place[b]);
+
+  Clique clique;
+  for (int r = 0; r < n; ++r) {
+    const std::vector<int>& vertices = group[r];
+    if (vertices.size() == 1) clique.members.push_back(vertices[0]);
+    if (vertices.size() <= 1) continue;
+    const std::size_t m = vertices.size();
+    Adjacency adjacency(m, std::vector<char>(m, 1));
+    for (std::size_t k = 0; k < m; ++k) adjacency[k][k] = 0;
+    for (const auto& [a, b] : missing_in[r]) adjacency[a][b] = adjacency[b][a] = 0;
+    const Clique part = maximum_clique(adjacency, max_exact_vertices, max_steps);
+    for (int v : part.members) clique.members.push_back(vertices[v]);
+    clique.exact = clique.exact && part.exact;
+  }
+  std::sort(clique.members.begin(), clique.members.end());
+  return clique;
+}
+
 LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
-                                      const LoopConsistencyConfig& config, PairDistances* known) {
+                                      const LoopConsistencyConfig& config, KnownConflicts* known) {
   LoopSelection selection;
   selection.verdicts.assign(loops.size(), LoopVerdict::implausible);
   selection.dr_mahalanobis2.assign(loops.size(), 0.0);
@@ -240,14 +292,17 @@ LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, c
   }
 
   const int n = static_cast<int>(forward.size());
-  Adjacency adjacency(n, std::vector<char>(n, 0));
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b) {
-      const double d2 = known ? (*known)(forward[a], forward[b], dr) : pair_mahalanobis2(forward[a], forward[b], dr);
-      adjacency[a][b] = adjacency[b][a] = d2 <= config.pair_chi2_threshold;
+  std::vector<std::pair<int, int>> disagreeing;
+  if (known) {
+    disagreeing = known->among(forward, dr, config.pair_chi2_threshold);
+  } else {
+    for (int a = 0; a < n; ++a) {
+      for (int b = a + 1; b < n; ++b) {
+        if (pair_mahalanobis2(forward[a], forward[b], dr) > config.pair_chi2_threshold) disagreeing.emplace_back(a, b);
+      }
     }
   }
-  const Clique clique = maximum_clique(adjacency, config.max_exact_loops, config.max_branch_steps);
+  const Clique clique = maximum_clique_missing(n, disagreeing, config.max_exact_loops, config.max_branch_steps);
   selection.exact = clique.exact;
   if (clique.members.size() >= 2 || n == 1) {
     for (int member : clique.members) {

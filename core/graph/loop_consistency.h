@@ -3,6 +3,7 @@
 // (dr_noise.h), and together they must agree with one another: pairwise consistency
 // maximisation (PCM, Mangelson et al., ICRA 2018) keeps the largest set of loops every two of
 // which close a cycle through dead reckoning.
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -20,7 +21,7 @@ struct LoopCandidate {
   int to = 0;
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();
   Covariance6 covariance = Covariance6::Identity();
-  int id = -1;  // the caller's stable name for this loop, for PairDistances; -1: none
+  int id = -1;  // the caller's stable name for this loop, for KnownConflicts; -1: none
 };
 
 // A registration edge as a loop candidate, its frames levelled at the nodes' DR poses and its
@@ -35,19 +36,24 @@ LoopCandidate loop_candidate(const PoseGraphEdge& edge, const std::vector<Eigen:
 // and the test errs towards calling loops consistent.
 double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr);
 
-// pair_mahalanobis2 of loops named by their ids, each pair computed once and kept: a
-// registration's measurement and dead reckoning do not change once made, so a survey
-// registered batch by batch, which selects again after each batch, need not test again the
-// pairs an earlier batch tested (`large`: ~740 loops, a quarter of a million pairs a batch).
-// For one DrNoiseModel and one set of named loops; a loop without an id is not kept.
-class PairDistances {
+// The pairs of named loops that disagree (pair_mahalanobis2 beyond a threshold), each pair
+// tested once: a registration's measurement and dead reckoning do not change once made, so a
+// survey registered batch by batch, which selects again after each batch, tests a new loop
+// against the loops before it and never again (`large`: ~5,500 loops; testing and scanning every
+// pair each batch grew with the cube of the survey, docs/performance.md). Only the few
+// disagreeing pairs are kept. For one DrNoiseModel, one threshold and one set of named loops,
+// each given forward (from <= to) and always the same under its id.
+class KnownConflicts {
  public:
-  double operator()(const LoopCandidate& i, const LoopCandidate& j, const DrNoiseModel& dr);
+  // The disagreeing pairs among `loops` (all named), as index pairs {a, b}, a < b, into `loops`.
+  std::vector<std::pair<int, int>> among(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
+                                         double pair_chi2_threshold);
 
  private:
-  int slot(int id);
-  std::vector<int> slot_of_id_;            // -1: no slot yet
-  std::vector<std::vector<double>> rows_;  // rows_[s][t], t < s: between slots s and t; NaN: not yet
+  int slot(const LoopCandidate& loop, const DrNoiseModel& dr, double pair_chi2_threshold);
+  std::vector<int> slot_of_id_;               // -1: no slot yet
+  std::vector<LoopCandidate> loops_;          // by slot
+  std::vector<std::vector<int>> conflicts_;   // by slot: the earlier slots it disagrees with
 };
 
 // `loop` as the same measurement from `to` to `from`.
@@ -66,13 +72,21 @@ struct Clique {
 // degree that is adjacent to every member so far).
 Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices = 300, long max_steps = 2'000'000);
 
+// The largest clique of the graph on `n` vertices whose every pair is an edge but `missing`
+// (index pairs): the union of maximum_clique over the groups the missing edges join, since two
+// vertices of different groups are always adjacent. Exact wherever each group is small enough
+// for maximum_clique's search, however many vertices; costs O(n + missing) beside the groups'.
+Clique maximum_clique_missing(int n, const std::vector<std::pair<int, int>>& missing, int max_exact_vertices = 300,
+                              long max_steps = 2'000'000);
+
 struct LoopConsistencyConfig {
   PlausibilityConfig plausibility;
   // χ²₃ at 99.9 %, as for plausibility: a correct pair is called inconsistent once in a thousand,
   // and one such refusal only costs a loop if its other partners cannot carry it into the clique.
   double pair_chi2_threshold = 16.27;
-  // Exact search up to this many plausible loops (a few seconds at worst on a dense graph),
-  // greedy above; both also bounded by a branch budget.
+  // Exact search in each group of loops their disagreements join (maximum_clique_missing) up to
+  // this many loops (a few seconds at worst on a dense graph), greedy above; both also bounded
+  // by a branch budget.
   int max_exact_loops = 300;
   long max_branch_steps = 2'000'000;
   template <typename Field>
@@ -101,8 +115,8 @@ struct LoopSelection {
 // plausible ones. A lone plausible loop is kept: there is nothing to check it against, and DR
 // has already found it possible. Several plausible loops of which no two agree keep none:
 // each is contradicted and none confirmed.
-// With `known`, the pairs' distances come from it (and go into it).
+// With `known`, the pairs' tests come from it (and go into it).
 LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
-                                      const LoopConsistencyConfig& config = {}, PairDistances* known = nullptr);
+                                      const LoopConsistencyConfig& config = {}, KnownConflicts* known = nullptr);
 
 }  // namespace bathyslam

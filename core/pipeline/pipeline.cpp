@@ -130,7 +130,7 @@ class NavigationNoiseTracker {
  public:
   explicit NavigationNoiseTracker(const PipelineConfig& config) : config_(config) {}
 
-  void update(PipelineResult& r, DrNoiseModel& dr, PairDistances& pair_distances, const Plan& plan, bool last) {
+  void update(PipelineResult& r, DrNoiseModel& dr, KnownConflicts& known_conflicts, const Plan& plan, bool last) {
     // Counted first: the innovations themselves are built only when an estimate is due.
     const auto count = static_cast<double>(std::count_if(r.constraints.begin(), r.constraints.end(),
                                                          [&](const Constraint& c) { return observes_drift(c, plan, config_.graph); }));
@@ -141,7 +141,7 @@ class NavigationNoiseTracker {
                                                    config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(r.dr_poses, graph);
-    pair_distances = PairDistances{};  // PCM's tests rest on the model
+    known_conflicts = KnownConflicts{};  // PCM's tests rest on the model
     for (Constraint& c : r.constraints) {
       if (c.type == ConstraintType::kOdometry) {
         c.information = odometry_information(graph, c.from);
@@ -170,7 +170,7 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
   const int batch = plan.batch_submaps > 0 ? plan.batch_submaps : std::max(n, 1);
   std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
   std::vector<char> solved_with;  // per constraint: in the graph at the last solve
-  PairDistances pair_distances;   // PCM's pairwise tests so far, by constraint
+  KnownConflicts known_conflicts;  // PCM's pairwise tests so far, by constraint
   for (int begin = 0; begin < n; begin += batch) {
     const int end = std::min(n, begin + batch);
     for (int s = std::max(begin, 1); s < end; ++s) {
@@ -181,9 +181,9 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     const std::vector<Candidate> candidates = candidates_ending_in(r.submaps, estimate, begin, end, config.candidates, plan);
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
-    if (plan.estimate_noise) noise.update(r, dr, pair_distances, plan, end == n);
+    if (plan.estimate_noise) noise.update(r, dr, known_conflicts, plan, end == n);
     if (plan.consistency) {
-      select_consistent_registrations(r.constraints, dr, r.dr_poses, config.robustness.pcm, &pair_distances);
+      select_consistent_registrations(r.constraints, dr, r.dr_poses, config.robustness.pcm, &known_conflicts);
     }
     const int first_changed = first_node_changed(r.constraints, solved_with);
     if (end < n && first_changed < end) {

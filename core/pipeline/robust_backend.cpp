@@ -170,7 +170,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
 
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
                                      const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config,
-                                     PairDistances* known) {
+                                     KnownConflicts* known) {
   std::vector<std::size_t> owner;
   std::vector<LoopCandidate> candidates;
   for (std::size_t k = 0; k < constraints.size(); ++k) {

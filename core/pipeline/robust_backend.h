@@ -53,7 +53,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
 // same growing `constraints`, each pair's test is computed once.
 void select_consistent_registrations(std::vector<Constraint>& constraints, const DrNoiseModel& dr,
                                      const std::vector<Eigen::Isometry3d>& dr_poses, const LoopConsistencyConfig& config,
-                                     PairDistances* known = nullptr);
+                                     KnownConflicts* known = nullptr);
 
 // The graph of the constraints in it, solved from `initial` (dead reckoning, or a batch's
 // estimate). With `nodes`, only the constraints among the first `nodes` poses; the others keep

@@ -470,6 +470,39 @@ TEST(MaximumClique, TheGreedySearchOnManyLoopsIsTheDocumentedOne) {
   }
 }
 
+// Two vertices the missing edges do not join are always adjacent, so the largest clique is the
+// largest of each group the missing edges join, put together: as large as the search over the
+// whole graph finds, and exact on thousands of loops that disagree in small groups.
+TEST(MaximumClique, GroupsOfMissingEdgesGiveTheWholeGraphsLargestClique) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 40;
+    std::uniform_int_distribution<int> vertex(0, n - 1);
+    std::vector<std::pair<int, int>> missing;
+    Adjacency adjacency(n, std::vector<char>(n, 1));
+    for (int v = 0; v < n; ++v) adjacency[v][v] = 0;
+    for (int k = 0; k < 3 * trial; ++k) {
+      const int a = vertex(rng), b = vertex(rng);
+      if (a == b || !adjacency[a][b]) continue;
+      adjacency[a][b] = adjacency[b][a] = 0;
+      missing.emplace_back(std::min(a, b), std::max(a, b));
+    }
+    const Clique whole = maximum_clique(adjacency);
+    const Clique grouped = maximum_clique_missing(n, missing);
+    ASSERT_TRUE(whole.exact && grouped.exact);
+    EXPECT_EQ(grouped.members.size(), whole.members.size()) << "trial " << trial;
+    for (int a : grouped.members) {
+      for (int b : grouped.members) EXPECT_TRUE(a == b || adjacency[a][b]) << "trial " << trial;
+    }
+  }
+  // 3,000 loops, 100 pairs of which disagree: one of each pair goes, every other loop stays.
+  std::vector<std::pair<int, int>> pairs;
+  for (int k = 0; k < 100; ++k) pairs.emplace_back(30 * k, 30 * k + 7);
+  const Clique many = maximum_clique_missing(3000, pairs);
+  EXPECT_TRUE(many.exact);
+  EXPECT_EQ(many.members.size(), 2900u);
+}
+
 TEST(LoopConsistency, ReversingALoopKeepsItsPairDistances) {
   const Survey s = lawnmower(1);
   std::mt19937 rng(2);
@@ -630,9 +663,9 @@ TEST(RobustGraph, RecoversALawnmowerFromThirtyPercentWrongLoops) {
   }
 }
 
-// The pipeline selects again after every batch, with the pairs' tests kept (PairDistances):
+// The pipeline selects again after every batch, with the pairs' tests kept (KnownConflicts):
 // batch after batch, the selection must be the one every pair computed afresh gives.
-TEST(RobustGraph, KeptPairDistancesSelectAsComputingEveryPair) {
+TEST(RobustGraph, KeptPairTestsSelectAsComputingEveryPair) {
   // As above: the first loop turned 10° (plausible, inconsistent), the last 180° (implausible).
   const Survey s = lawnmower(3);
   std::mt19937 rng(4);
@@ -643,7 +676,7 @@ TEST(RobustGraph, KeptPairDistancesSelectAsComputingEveryPair) {
   std::vector<LoopCandidate> all = candidates_of(edges, s.dr);
   for (std::size_t k = 0; k < all.size(); ++k) all[k].id = static_cast<int>(k);
   const DrNoiseModel dr(s.dr, GraphConfig{});
-  PairDistances known;
+  KnownConflicts known;
   int inconsistent = 0;
   for (std::size_t n = 5; n <= all.size(); n += 5) {
     const std::vector<LoopCandidate> batch(all.begin(), all.begin() + n);
