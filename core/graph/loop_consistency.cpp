@@ -203,12 +203,16 @@ std::vector<std::pair<int, int>> KnownConflicts::among(const std::vector<LoopCan
     slots.push_back(slot(loop, dr, pair_chi2_threshold));
   }
   index_of_slot.assign(loops_.size(), -1);
-  for (std::size_t k = 0; k < slots.size(); ++k) index_of_slot[slots[k]] = static_cast<int>(k);
+  for (std::size_t k = 0; k < slots.size(); ++k) {
+    if (index_of_slot[slots[k]] >= 0) throw std::invalid_argument("KnownConflicts: loop id given twice");
+    index_of_slot[slots[k]] = static_cast<int>(k);
+  }
   std::vector<std::pair<int, int>> pairs;
   for (std::size_t k = 0; k < slots.size(); ++k) {
     for (int earlier : conflicts_[slots[k]]) {
       const int other = index_of_slot[earlier];
-      if (other >= 0) pairs.emplace_back(std::min<int>(other, k), std::max<int>(other, k));
+      const int self = static_cast<int>(k);
+      if (other >= 0) pairs.emplace_back(std::min(other, self), std::max(other, self));
     }
   }
   return pairs;

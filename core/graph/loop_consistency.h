@@ -42,10 +42,12 @@ double pair_mahalanobis2(const LoopCandidate& i, const LoopCandidate& j, const D
 // against the loops before it and never again (`large`: ~5,500 loops; testing and scanning every
 // pair each batch grew with the cube of the survey, docs/performance.md). Only the few
 // disagreeing pairs are kept. For one DrNoiseModel, one threshold and one set of named loops,
-// each given forward (from <= to) and always the same under its id.
+// each given forward (from <= to) and always the same under its id: a new noise model needs a
+// new KnownConflicts, whose tests then cost n²/2 again.
 class KnownConflicts {
  public:
-  // The disagreeing pairs among `loops` (all named), as index pairs {a, b}, a < b, into `loops`.
+  // The disagreeing pairs among `loops`, as index pairs {a, b}, a < b, into `loops`. Throws
+  // invalid_argument for a loop without an id or an id given twice.
   std::vector<std::pair<int, int>> among(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
                                          double pair_chi2_threshold);
 
@@ -75,7 +77,9 @@ Clique maximum_clique(const Adjacency& adjacency, int max_exact_vertices = 300, 
 // The largest clique of the graph on `n` vertices whose every pair is an edge but `missing`
 // (index pairs): the union of maximum_clique over the groups the missing edges join, since two
 // vertices of different groups are always adjacent. Exact wherever each group is small enough
-// for maximum_clique's search, however many vertices; costs O(n + missing) beside the groups'.
+// for maximum_clique's search (and its branch budget, which applies to each group), however many
+// vertices; costs O(n + missing) beside the groups' own searches, O(m²) and more for m members.
+// One loop that disagrees with many joins them all into one group.
 Clique maximum_clique_missing(int n, const std::vector<std::pair<int, int>>& missing, int max_exact_vertices = 300,
                               long max_steps = 2'000'000);
 
@@ -115,7 +119,8 @@ struct LoopSelection {
 // plausible ones. A lone plausible loop is kept: there is nothing to check it against, and DR
 // has already found it possible. Several plausible loops of which no two agree keep none:
 // each is contradicted and none confirmed.
-// With `known`, the pairs' tests come from it (and go into it).
+// With `known`, the pairs' tests come from it (and go into it); every plausible loop must then
+// be named (KnownConflicts::among throws otherwise).
 LoopSelection select_consistent_loops(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
                                       const LoopConsistencyConfig& config = {}, KnownConflicts* known = nullptr);
 

@@ -156,16 +156,6 @@ class NavigationNoiseTracker {
   double estimated_from_ = 0;  // innovations at the last estimate
 };
 
-// The first submap of the `lines` survey lines up to submap `s`'s (its own counted), walking
-// back in survey order; 0 when the survey before it has fewer.
-int first_of_lines_back(const std::vector<Submap>& submaps, int s, int lines) {
-  int changes = 0;
-  for (int k = s; k > 0; --k) {
-    if (submaps[k - 1].line != submaps[k].line && ++changes == lines) return k;
-  }
-  return 0;
-}
-
 // Registration in survey order, a batch of submaps at a time, as a vehicle would map: each
 // batch is predicted by dead reckoning from the trajectory corrected so far, its candidates are
 // registered from that prediction, and the graph is solved before the next batch. A pair's
@@ -206,17 +196,9 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
       // Of several surveys, the earlier ones are held too: the batch is mapped against them, and
       // a registration with an early submap of the first survey would otherwise re-solve every
       // survey each batch (20 `small` surveys: 358 of 628 s). The final solve moves them all.
-      // With plan.batch_solve_lines, only within the last lines but at a line's end: a batch is
-      // registered against the lines before it, and the next line is predicted from a survey
-      // its loops have bent.
       const int survey_begin = survey_nodes(config.graph.survey_starts, survey_of(config.graph.survey_starts, begin), n).begin;
-      int first_free = std::max(first_changed, survey_begin);
-      const bool line_ended = r.submaps.submaps[begin].line != r.submaps.submaps[end].line;
-      if (plan.batch_solve_lines > 0 && !line_ended) {
-        first_free = std::max(first_free, first_of_lines_back(r.submaps.submaps, begin, plan.batch_solve_lines));
-      }
       const auto start = std::chrono::steady_clock::now();
-      estimate = solve(estimate, r.constraints, r.navigation_noise.graph, end, first_free).poses;
+      estimate = solve(estimate, r.constraints, r.navigation_noise.graph, end, std::max(first_changed, survey_begin)).poses;
       r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       ++r.batch_solves;
     }

@@ -42,7 +42,6 @@ Plan plan_of(const PipelineConfig& c) {
   plan.quality_aware = plan.registration && c.stages.quality_aware;
   plan.loop_closures = plan.registration && c.stages.loop_closures;
   plan.batch_submaps = plan.registration ? c.stages.batch_submaps : 0;
-  plan.batch_solve_lines = plan.batch_submaps > 0 ? c.stages.batch_solve_lines : 0;
   plan.dr_gate = plan.registration && c.robustness.dr_gate;
   plan.consistency = plan.registration && c.robustness.consistency;
   plan.safety_net = plan.registration && c.robustness.safety_net;

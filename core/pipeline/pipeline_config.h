@@ -46,12 +46,6 @@ struct PipelineConfig {
     // trajectory corrected so far (pipeline.cpp, register_incrementally). 0: every pair at
     // once, every guess straight from dead reckoning.
     int batch_submaps = 10;
-    // When > 0, a batch's solve moves only the submaps of this many lines up to its own (4: its
-    // own and the three its adjacent pairs are registered against), older ones held where the
-    // last solve put them, except at a line's end: `large`'s batch solves 2.6x faster, but the
-    // `small` matrix's results move both ways, sand waves paper 1's consistency RMSE doubled
-    // (docs/performance.md). 0: every batch solved from the first submap that changed.
-    int batch_solve_lines = 0;
 
     template <typename Field>
     void fields(Field&& field) {
@@ -60,7 +54,6 @@ struct PipelineConfig {
       field("quality_aware", quality_aware, 0, 1);
       field("loop_closures", loop_closures, 0, 1);
       field("batch_submaps", batch_submaps, 0, 1000000);
-      field("batch_solve_lines", batch_solve_lines, 0, 1000000);
     }
   } stages;
 
@@ -211,7 +204,6 @@ struct Plan {
   bool quality_aware = false;  // acceptance tests and quality-weighted information
   bool loop_closures = false;
   int batch_submaps = 0;       // 0: one batch of every submap
-  int batch_solve_lines = 0;   // 0: each batch solved from its first changed submap
   bool dr_gate = false, consistency = false, safety_net = false;
   bool direct_loops = false;      // loop closures without features by the direct path, within reach
   bool estimate_noise = false;    // the survey's own DR noise instead of Table 1's

@@ -466,21 +466,6 @@ TEST(Pipeline, OneAndTwoThreadsGiveTheSameResult) {
   }
 }
 
-// With stages.batch_solve_lines a batch's solve moves only its last lines, save at a line's end:
-// even at one line (every batch but a line's last held to its own line) the survey comes out
-// within a tenth of the result with every batch solved from its first change.
-TEST(Pipeline, BatchSolvesWithinTheLastLinesKeepTheWholeSolvesResult) {
-  PipelineConfig config = preset_config(Configuration::kMchs);
-  config.stages.batch_solve_lines = 0;
-  const PipelineResult whole = run_pipeline(small_survey(), config);
-  config.stages.batch_solve_lines = 1;
-  const PipelineResult lines = run_pipeline(small_survey(), config);
-  ASSERT_GT(rmse(whole.dr_trajectory_errors), 2 * rmse(whole.trajectory_errors)) << "the survey gains at all";
-  EXPECT_NEAR(rmse(lines.trajectory_errors), rmse(whole.trajectory_errors), 0.1 * rmse(whole.trajectory_errors));
-  EXPECT_NEAR(lines.consistency.stats.rmse, whole.consistency.stats.rmse, 0.1 * whole.consistency.stats.rmse);
-  EXPECT_EQ(lines.batch_solves, whole.batch_solves);
-}
-
 TEST(Pipeline, CancellationStopsItDuringRegistration) {
   std::atomic<bool> cancel = false;
   std::vector<std::string> stages;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 #include "core/graph/dr_noise.h"
@@ -501,6 +502,11 @@ TEST(MaximumClique, GroupsOfMissingEdgesGiveTheWholeGraphsLargestClique) {
   const Clique many = maximum_clique_missing(3000, pairs);
   EXPECT_TRUE(many.exact);
   EXPECT_EQ(many.members.size(), 2900u);
+  // A group above the exact search's size is searched greedily, and the answer says so.
+  std::vector<std::pair<int, int>> chain;
+  for (int v = 0; v < 10; ++v) chain.emplace_back(v, v + 1);
+  EXPECT_TRUE(maximum_clique_missing(20, chain, 11).exact);
+  EXPECT_FALSE(maximum_clique_missing(20, chain, 10).exact);
 }
 
 TEST(LoopConsistency, ReversingALoopKeepsItsPairDistances) {
@@ -687,6 +693,24 @@ TEST(RobustGraph, KeptPairTestsSelectAsComputingEveryPair) {
     inconsistent = static_cast<int>(std::count(fresh.verdicts.begin(), fresh.verdicts.end(), LoopVerdict::inconsistent));
   }
   EXPECT_GT(inconsistent, 0) << "a wrong loop must be tested against the others";
+
+  // In any order, and with loops leaving the set and coming back, as constraints leave the graph.
+  KnownConflicts shuffled;
+  std::mt19937 order_rng(9);
+  for (int round = 0; round < 6; ++round) {
+    std::vector<LoopCandidate> some;
+    std::bernoulli_distribution keep(0.7);
+    for (const LoopCandidate& loop : all) {
+      if (keep(order_rng)) some.push_back(loop);
+    }
+    std::shuffle(some.begin(), some.end(), order_rng);
+    const LoopSelection fresh = select_consistent_loops(some, dr);
+    const LoopSelection kept = select_consistent_loops(some, dr, {}, &shuffled);
+    ASSERT_EQ(kept.verdicts, fresh.verdicts) << "round " << round;
+    ASSERT_EQ(kept.kept, fresh.kept) << "round " << round;
+  }
+  std::vector<LoopCandidate> twice = {all[0], all[1], all[0]};
+  EXPECT_THROW(select_consistent_loops(twice, dr, {}, &shuffled), std::invalid_argument);
 }
 
 }  // namespace
