@@ -196,13 +196,12 @@ int KnownConflicts::slot(const LoopCandidate& loop, const DrNoiseModel& dr, doub
 
 std::vector<std::pair<int, int>> KnownConflicts::among(const std::vector<LoopCandidate>& loops, const DrNoiseModel& dr,
                                                        double pair_chi2_threshold) {
-  std::vector<int> index_of_slot;  // -1: not among `loops`
   std::vector<int> slots;
   for (const LoopCandidate& loop : loops) {
     if (loop.id < 0) throw std::invalid_argument("KnownConflicts: a loop without an id");
     slots.push_back(slot(loop, dr, pair_chi2_threshold));
   }
-  index_of_slot.assign(loops_.size(), -1);
+  std::vector<int> index_of_slot(loops_.size(), -1);  // -1: not among `loops`
   for (std::size_t k = 0; k < slots.size(); ++k) {
     if (index_of_slot[slots[k]] >= 0) throw std::invalid_argument("KnownConflicts: loop id given twice");
     index_of_slot[slots[k]] = static_cast<int>(k);
