@@ -1,0 +1,110 @@
+#include "core/matching/feature_matching.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "core/features/terrain_grid.h"
+#include "tests/unit/synthetic_terrain.h"
+
+namespace bathyslam {
+namespace {
+
+// Algorithm 2's matching as written, every pair within the gate scored in full: best and second
+// best MSE among those that correlate, the ratio test, then mutual best matches by MSE.
+std::vector<FeatureMatch> plain_matches(const std::vector<Keypoint>& source, const std::vector<Keypoint>& target,
+                                        const Eigen::Isometry3d& source_to_target, const MatchConfig& config) {
+  const auto one_way = [&](const std::vector<Keypoint>& queries, const std::vector<Keypoint>& indexed,
+                           const Eigen::Isometry3d& query_to_indexed, const Eigen::Isometry3d& indexed_to_common) {
+    std::vector<int> best(queries.size(), -1);
+    std::vector<double> best_mse(queries.size(), 0);
+    for (std::size_t i = 0; i < queries.size(); ++i) {
+      const Eigen::Vector2d q = (query_to_indexed * queries[i].position).head<2>();
+      double first = std::numeric_limits<double>::infinity(), second = first;
+      int index = -1;
+      for (std::size_t j = 0; j < indexed.size(); ++j) {
+        if ((q - (indexed_to_common * indexed[j].position).head<2>()).norm() > config.max_distance_m) continue;
+        if (descriptor_ncc(queries[i].descriptor, indexed[j].descriptor) < config.min_ncc) continue;
+        const double mse = descriptor_mse(queries[i].descriptor, indexed[j].descriptor);
+        if (mse < first) {
+          second = first;
+          first = mse;
+          index = static_cast<int>(j);
+        } else {
+          second = std::min(second, mse);
+        }
+      }
+      if (index >= 0 && first < config.ratio * second) {
+        best[i] = index;
+        best_mse[i] = first;
+      }
+    }
+    return std::make_pair(best, best_mse);
+  };
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  const auto [forward, forward_mse] = one_way(source, target, source_to_target, identity);
+  const auto [backward, unused] = one_way(target, source, identity, source_to_target);
+  std::vector<FeatureMatch> matches;
+  for (std::size_t i = 0; i < forward.size(); ++i) {
+    if (forward[i] >= 0 && backward[forward[i]] == static_cast<int>(i)) matches.push_back({static_cast<int>(i), forward[i], forward_mse[i]});
+  }
+  std::sort(matches.begin(), matches.end(), [](const FeatureMatch& a, const FeatureMatch& b) { return a.mse < b.mse; });
+  return matches;
+}
+
+// Keypoints of two overlapping patches of one mound field, the source's frame shifted by `shift`.
+std::pair<std::vector<Keypoint>, std::vector<Keypoint>> keypoints_of_two_views(int seed, const Eigen::Vector3d& shift,
+                                                                               double noise_m) {
+  const SyntheticTerrain terrain = SyntheticTerrain::with_mounds(seed);
+  Eigen::Isometry3d source_pose = Eigen::Isometry3d::Identity();
+  source_pose.translation() = shift;
+  const std::vector<Keypoint> target = detect_keypoints(grid_terrain(terrain.sample(Eigen::Isometry3d::Identity(), noise_m, 1), {}));
+  const std::vector<Keypoint> source = detect_keypoints(grid_terrain(terrain.sample(source_pose, noise_m, 2), {}));
+  return {source, target};
+}
+
+// The matcher skips the scoring of neighbours that cannot beat the second best (a bound from
+// each descriptor's block means and the rest's length): that must not change a single match.
+TEST(FeatureMatching, GivesTheMatchesOfScoringEveryPairInFull) {
+  int compared = 0;
+  for (int seed = 1; seed <= 2; ++seed) {
+    const Eigen::Vector3d shift(2.5 * seed, -1.5, 0);
+    const auto [source, target] = keypoints_of_two_views(seed, shift, 0.02);
+    ASSERT_GT(source.size(), 20u);
+    Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
+    guess.translation() = shift + Eigen::Vector3d(0.7, -0.4, 0);  // a dead-reckoning guess, off a little
+    for (const MatchConfig config : {MatchConfig{}, MatchConfig{8.0, 0.5, 0.95, 30}}) {
+      const std::vector<FeatureMatch> fast = match_features(source, target, guess, config);
+      const std::vector<FeatureMatch> plain = plain_matches(source, target, guess, config);
+      ASSERT_EQ(fast.size(), plain.size()) << "seed " << seed;
+      for (std::size_t k = 0; k < fast.size(); ++k) {
+        EXPECT_EQ(fast[k].source, plain[k].source);
+        EXPECT_EQ(fast[k].target, plain[k].target);
+        EXPECT_NEAR(fast[k].mse, plain[k].mse, 1e-12);
+      }
+      compared += static_cast<int>(fast.size());
+    }
+  }
+  EXPECT_GT(compared, 1000) << "the surveys gave matches to compare";
+}
+
+// The same ground seen from a frame 6 m away: the matches join keypoints at the same place.
+TEST(FeatureMatching, JoinsKeypointsOfTheSameGround) {
+  const Eigen::Vector3d shift(6.0, 3.0, 0);
+  const auto [source, target] = keypoints_of_two_views(5, shift, 0.01);
+  Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
+  guess.translation() = shift + Eigen::Vector3d(1.0, 1.0, 0);
+  const std::vector<FeatureMatch> matches = match_features(source, target, guess);
+  ASSERT_GE(matches.size(), 10u);
+  int right = 0;
+  for (const FeatureMatch& m : matches) {
+    const Eigen::Vector3d source_in_target = source[m.source].position + shift;
+    if ((source_in_target - target[m.target].position).head<2>().norm() < 1.0) ++right;
+  }
+  EXPECT_GE(right, 0.9 * static_cast<double>(matches.size())) << right << " of " << matches.size();
+}
+
+}  // namespace
+}  // namespace bathyslam
