@@ -7,11 +7,6 @@
 
 namespace bathyslam {
 
-SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints) {
-  const TerrainGrid terrain = grid_terrain(submap.points, grid);
-  return {detect_keypoints(terrain, keypoints), terrain.valid_cells(), terrain};
-}
-
 double feature_density(const SubmapFeatures& a, const SubmapFeatures& b) {
   const int cells = a.valid_cells + b.valid_cells;
   return cells > 0 ? static_cast<double>(a.keypoints.size() + b.keypoints.size()) / cells : 0.0;

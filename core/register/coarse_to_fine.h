@@ -5,8 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/features/terrain_grid.h"
-#include "core/features/tsd_keypoints.h"
+#include "core/features/submap_features.h"
 #include "core/matching/adaptive_ransac.h"
 #include "core/matching/feature_matching.h"
 #include "core/register/gicp.h"
@@ -17,14 +16,6 @@
 #include "core/types/fields.h"
 
 namespace bathyslam {
-
-struct SubmapFeatures {
-  std::vector<Keypoint> keypoints;
-  int valid_cells = 0;
-  TerrainGrid grid;  // kept for the uniqueness probe
-};
-
-SubmapFeatures extract_features(const Submap& submap, const GridConfig& grid, const KeypointConfig& keypoints);
 
 struct SwitchConfig {
   double min_feature_density = 0.005;  // Table 1 (a): keypoints per valid cell of the pair

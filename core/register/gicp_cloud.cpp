@@ -4,7 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "core/register/parallel_chunks.h"
+#include "core/parallel/parallel_chunks.h"
 
 namespace bathyslam {
 namespace {

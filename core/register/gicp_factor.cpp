@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/register/parallel_chunks.h"
+#include "core/parallel/parallel_chunks.h"
 
 namespace bathyslam {
 namespace {

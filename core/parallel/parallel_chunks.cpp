@@ -1,4 +1,4 @@
-#include "core/register/parallel_chunks.h"
+#include "core/parallel/parallel_chunks.h"
 
 #include <algorithm>
 

@@ -1,5 +1,5 @@
 #pragma once
-// register (own GICP): the one place the GICP stages go parallel, kept apart from the
+// parallel: how our GICP's stages go parallel, kept apart from the
 // algorithm (as small_gicp keeps its reductions apart from its factors). [0, n) is cut into one
 // contiguous chunk per thread; each chunk fills its own accumulator and the caller sums them in
 // chunk order, so a result depends on the thread count only through rounding.
