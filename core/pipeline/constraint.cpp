@@ -7,6 +7,10 @@
 
 namespace bathyslam {
 
+PoseGraphEdge graph_edge(const Constraint& c) {
+  return {c.from, c.to, c.measured, c.information, !from_navigation(c.type), c.anchor};
+}
+
 std::string to_string(ConstraintType t) {
   switch (t) {
     case ConstraintType::kOdometry: return "odometry";

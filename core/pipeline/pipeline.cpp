@@ -123,6 +123,16 @@ std::vector<DrInnovation> dr_innovations(const std::vector<Constraint>& constrai
   return innovations;
 }
 
+// The register stage's answer.
+struct Registrations {
+  std::vector<Constraint> constraints;  // dead reckoning's odometry first, then every registration
+  // The survey's own DR noise (navigation_noise.h), which the graph's odometry edges, the gates
+  // and the safety net use; the prior's when not estimated.
+  NavigationNoiseEstimate navigation_noise;
+  int batch_solves = 0;  // the graph solves between batches, and their time
+  double batch_solve_seconds = 0;
+};
+
 // Estimates the survey's DR noise from the registrations so far when they have grown by a
 // quarter since the last estimate (or `last`), and, when the model changes, gives the odometry
 // edges its information and judges every registration again under it (judge_with_prior).
@@ -130,23 +140,24 @@ class NavigationNoiseTracker {
  public:
   explicit NavigationNoiseTracker(const PipelineConfig& config) : config_(config) {}
 
-  void update(PipelineResult& r, DrNoiseModel& dr, KnownConflicts& known_conflicts, const Plan& plan, bool last) {
+  void update(Registrations& r, const std::vector<Eigen::Isometry3d>& dr_poses, DrNoiseModel& dr,
+              KnownConflicts& known_conflicts, const Plan& plan, bool last) {
     // Counted first: the innovations themselves are built only when an estimate is due.
     const auto count = static_cast<double>(std::count_if(r.constraints.begin(), r.constraints.end(),
                                                          [&](const Constraint& c) { return observes_drift(c, plan, config_.graph); }));
     if (count < config_.navigation_noise.min_registrations || (!last && count < 1.25 * estimated_from_)) return;
     if (count == estimated_from_) return;
     estimated_from_ = count;
-    r.navigation_noise = estimate_navigation_noise(r.dr_poses, dr_innovations(r.constraints, dr, r.dr_poses, plan, config_.graph),
+    r.navigation_noise = estimate_navigation_noise(dr_poses, dr_innovations(r.constraints, dr, dr_poses, plan, config_.graph),
                                                    config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
-    dr = DrNoiseModel(r.dr_poses, graph);
+    dr = DrNoiseModel(dr_poses, graph);
     known_conflicts = KnownConflicts{};  // PCM's tests rest on the model
     for (Constraint& c : r.constraints) {
       if (c.type == ConstraintType::kOdometry) {
         c.information = odometry_information(graph, c.from);
       } else {
-        judge_with_prior(c, dr, r.dr_poses, config_, plan);
+        judge_with_prior(c, dr, dr_poses, config_, plan);
       }
     }
   }
@@ -161,14 +172,17 @@ class NavigationNoiseTracker {
 // registered from that prediction, and the graph is solved before the next batch. A pair's
 // guess then carries the drift of one batch rather than of everything between its two
 // submaps, which across a lawnmower is tens of metres, far outside GICP's basin. Without
-// batches, one batch of every submap: every guess straight from dead reckoning.
-void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs, DrNoiseModel& dr,
-                            const PipelineConfig& config, const Plan& plan, const ProgressFn& progress,
-                            const std::atomic<bool>* cancel) {
+// batches, one batch of every submap: every guess straight from dead reckoning. `registered`
+// holds dead reckoning's odometry and the prior's noise when it starts.
+Registrations register_incrementally(Registrations registered, const SubmapSet& submaps, const RegistrationInputs& inputs,
+                                     DrNoiseModel& dr, const PipelineConfig& config, const Plan& plan,
+                                     const ProgressFn& progress, const std::atomic<bool>* cancel) {
+  Registrations& r = registered;
+  const std::vector<Eigen::Isometry3d>& dr_poses = inputs.dr_poses;
   NavigationNoiseTracker noise(config);
-  const int n = static_cast<int>(r.dr_poses.size());
+  const int n = static_cast<int>(dr_poses.size());
   const int batch = plan.batch_submaps > 0 ? plan.batch_submaps : std::max(n, 1);
-  std::vector<Eigen::Isometry3d> estimate = r.dr_poses;
+  std::vector<Eigen::Isometry3d> estimate = dr_poses;
   std::vector<char> solved_with;  // per constraint: in the graph at the last solve
   KnownConflicts known_conflicts;  // PCM's pairwise tests so far, by constraint
   for (int begin = 0; begin < n; begin += batch) {
@@ -176,14 +190,14 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     for (int s = std::max(begin, 1); s < end; ++s) {
       // Another survey's start is predicted from the datum, as its navigation placed it.
       const int previous = config.graph.has_step(s - 1) ? s - 1 : 0;
-      estimate[s] = estimate[previous] * (r.dr_poses[previous].inverse() * r.dr_poses[s]);
+      estimate[s] = estimate[previous] * (dr_poses[previous].inverse() * dr_poses[s]);
     }
-    const std::vector<Candidate> candidates = candidates_ending_in(r.submaps, estimate, begin, end, config.candidates, plan);
+    const std::vector<Candidate> candidates = candidates_ending_in(submaps, estimate, begin, end, config.candidates, plan);
     for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
-    if (plan.estimate_noise) noise.update(r, dr, known_conflicts, plan, end == n);
+    if (plan.estimate_noise) noise.update(r, dr_poses, dr, known_conflicts, plan, end == n);
     if (plan.consistency) {
-      select_consistent_registrations(r.constraints, dr, r.dr_poses, config.robustness.pcm, &known_conflicts);
+      select_consistent_registrations(r.constraints, dr, dr_poses, config.robustness.pcm, &known_conflicts);
     }
     const int first_changed = first_node_changed(r.constraints, solved_with);
     if (end < n && first_changed < end) {
@@ -204,45 +218,90 @@ void register_incrementally(PipelineResult& r, const RegistrationInputs& inputs,
     }
     if (progress) progress("register", static_cast<double>(end) / n);
   }
+  return registered;
 }
 
-// The published solution, and how it compares with dead reckoning and the reference.
-void evaluate(PipelineResult& r, const Plan& plan) {
-  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, r.config.consistency);
-  r.consistency = consistency_error(r.submaps, r.optimized_poses, r.config.consistency);
-  if (plan.safety_net && !r.safety_net.fell_back) fall_back_unless_more_consistent(r);
-  if (!r.submaps.survey_starts.empty()) {
-    r.dr_site_consistency = site_consistency(r.submaps, r.dr_poses, r.config.consistency);
-    r.site_consistency = site_consistency(r.submaps, r.optimized_poses, r.config.consistency);
+std::vector<int> line_of_node(const SubmapSet& submaps) {
+  std::vector<int> lines;
+  for (const Submap& s : submaps.submaps) lines.push_back(s.line);
+  return lines;
+}
+
+// The graph solved, through the safety net where the plan has it.
+Publication solve_graph(const SubmapSet& submaps, const std::vector<Eigen::Isometry3d>& dr_poses,
+                        std::vector<Constraint>& constraints, const GraphConfig& graph, const PipelineConfig& config,
+                        const Plan& plan) {
+  if (plan.safety_net) return solve_with_safety_net(dr_poses, line_of_node(submaps), constraints, graph, config.robustness);
+  return {solve(dr_poses, constraints, graph), {}};
+}
+
+// How the published map compares with dead reckoning's and with the reference.
+struct Evaluation {
+  ConsistencyReport dr_consistency, consistency;
+  std::optional<SiteConsistency> dr_site_consistency, site_consistency;
+  std::vector<double> dr_trajectory_errors, trajectory_errors;
+  std::vector<double> dr_aligned_trajectory_errors, aligned_trajectory_errors;
+};
+
+// Evaluates the solution `published`; with the safety net, a solved map less consistent than dead
+// reckoning's is not published: dead reckoning is, and evaluated instead.
+Evaluation evaluate(const SubmapSet& submaps, const std::vector<Eigen::Isometry3d>& dr_poses, Publication& published,
+                    std::vector<Constraint>& constraints, const PipelineConfig& config, const Plan& plan) {
+  Evaluation e;
+  e.dr_consistency = consistency_error(submaps, dr_poses, config.consistency);
+  e.consistency = consistency_error(submaps, published.graph.poses, config.consistency);
+  if (plan.safety_net && !published.safety_net.fell_back) {
+    if (const auto why = less_consistent_than_dead_reckoning(e.consistency, e.dr_consistency, submaps, dr_poses, config)) {
+      publish_dead_reckoning(published, dr_poses, constraints, *why);
+      e.consistency = e.dr_consistency;
+    }
   }
-  r.dr_trajectory_errors = trajectory_errors(r.submaps, r.dr_poses);
-  r.trajectory_errors = trajectory_errors(r.submaps, r.optimized_poses);
-  r.dr_aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.dr_poses);
-  r.aligned_trajectory_errors = aligned_trajectory_errors(r.submaps, r.optimized_poses);
+  const std::vector<Eigen::Isometry3d>& poses = published.graph.poses;
+  if (!submaps.survey_starts.empty()) {
+    e.dr_site_consistency = site_consistency(submaps, dr_poses, config.consistency);
+    e.site_consistency = site_consistency(submaps, poses, config.consistency);
+  }
+  e.dr_trajectory_errors = trajectory_errors(submaps, dr_poses);
+  e.trajectory_errors = trajectory_errors(submaps, poses);
+  e.dr_aligned_trajectory_errors = aligned_trajectory_errors(submaps, dr_poses);
+  e.aligned_trajectory_errors = aligned_trajectory_errors(submaps, poses);
+  return e;
 }
 
-}  // namespace
+// The published solution and its evaluation into the result.
+void take_publication(PipelineResult& r, Publication published, Evaluation evaluated) {
+  r.graph = std::move(published.graph);
+  r.safety_net = std::move(published.safety_net);
+  r.optimized_poses = r.graph.poses;
+  r.dr_consistency = std::move(evaluated.dr_consistency);
+  r.consistency = std::move(evaluated.consistency);
+  r.dr_site_consistency = std::move(evaluated.dr_site_consistency);
+  r.site_consistency = std::move(evaluated.site_consistency);
+  r.dr_trajectory_errors = std::move(evaluated.dr_trajectory_errors);
+  r.trajectory_errors = std::move(evaluated.trajectory_errors);
+  r.dr_aligned_trajectory_errors = std::move(evaluated.dr_aligned_trajectory_errors);
+  r.aligned_trajectory_errors = std::move(evaluated.aligned_trajectory_errors);
+}
 
-namespace {
-
-// `built_since`: when the making of `built` began, for the "submaps" stage's time.
+// `built_since`: when the making of `built` began, for the "submaps" stage's time. Each stage
+// returns its answer; the result is assembled from them at the end.
 PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_since, const PipelineConfig& given,
                    const ProgressFn& progress, const std::atomic<bool>* cancel) {
   auto report = [&](std::string_view stage, double fraction) {
     if (progress) progress(stage, fraction);
   };
-  PipelineResult r;
-  r.footprint_scale = footprint_scale(built.footprint, given);
-  r.config = scaled_to_footprint(given, r.footprint_scale);
-  r.config.graph.survey_starts = built.survey_starts;
-  const PipelineConfig& config = r.config;
+  const double scale = footprint_scale(built.footprint, given);
+  PipelineConfig config = scaled_to_footprint(given, scale);
+  config.graph.survey_starts = built.survey_starts;
   const Plan plan = plan_of(config);
-  r.navigation_noise.graph = config.graph;
-  StageClock clock(r.timings, built_since);
+  std::vector<StageTiming> timings;
+  StageClock clock(timings, built_since);
 
-  r.submaps = std::move(built);
-  for (const Submap& s : r.submaps.submaps) r.dr_poses.push_back(s.dr_pose);
-  r.constraints = odometry_constraints(r.dr_poses, config.graph);
+  const SubmapSet& submaps = built;
+  std::vector<Eigen::Isometry3d> dr_poses;
+  for (const Submap& s : submaps.submaps) dr_poses.push_back(s.dr_pose);
+  Registrations registered{odometry_constraints(dr_poses, config.graph), {}};
+  registered.navigation_noise.graph = config.graph;
   clock.done("submaps");
   report("submaps", 1);
   throw_if_cancelled(cancel);
@@ -254,26 +313,26 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
     std::vector<Cloud::Ptr> clouds;
     if (!plan.own_gicp) {
       report("filter", 0);
-      clouds = filtered_clouds(r.submaps, config.voxel, plan, cancel);
+      clouds = filtered_clouds(submaps, config.voxel, plan, cancel);
       clock.done("filter");
     }
 
     std::vector<SubmapFeatures> features;
     if (plan.features) {
       report("features", 0);
-      features = submap_features(r.submaps, config, plan, cancel);
+      features = submap_features(submaps, config, plan, cancel);
       clock.done("features");
     }
 
     report("register", 0);
-    DrNoiseModel dr(r.dr_poses, config.graph);  // the survey's estimate replaces it as registrations come
+    DrNoiseModel dr(dr_poses, config.graph);  // the survey's estimate replaces it as registrations come
     // Only ours asks the cache for a submap (prepared_pair): it filters each on first use.
-    const SubmapSet& submaps = r.submaps;
     const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {
       return voxel_filter(submaps.submaps[i].points, config.voxel);
     };
     GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp);
-    register_incrementally(r, {clouds, prepared, features, r.dr_poses, dr}, dr, config, plan, progress, cancel);
+    registered = register_incrementally(std::move(registered), submaps, {clouds, prepared, features, dr_poses, dr}, dr,
+                                        config, plan, progress, cancel);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) {
     return_freed_memory();
@@ -281,19 +340,27 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
   }
 
   report("graph", 0);
-  if (plan.safety_net) {
-    solve_with_safety_net(r, config);
-  } else {
-    r.graph = solve(r.dr_poses, r.constraints, r.navigation_noise.graph);
-  }
-  r.optimized_poses = r.graph.poses;
+  Publication published =
+      solve_graph(submaps, dr_poses, registered.constraints, registered.navigation_noise.graph, config, plan);
   clock.done("graph");
   throw_if_cancelled(cancel);
 
   report("eval", 0);
-  evaluate(r, plan);
+  Evaluation evaluated = evaluate(submaps, dr_poses, published, registered.constraints, config, plan);
   clock.done("eval");
   report("done", 1);
+
+  PipelineResult r;
+  r.config = std::move(config);
+  r.footprint_scale = scale;
+  r.submaps = std::move(built);
+  r.dr_poses = std::move(dr_poses);
+  r.constraints = std::move(registered.constraints);
+  r.navigation_noise = std::move(registered.navigation_noise);
+  r.batch_solves = registered.batch_solves;
+  r.batch_solve_seconds = registered.batch_solve_seconds;
+  take_publication(r, std::move(published), std::move(evaluated));
+  r.timings = std::move(timings);
   return r;
 }
 
@@ -360,19 +427,16 @@ int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, co
     // Solved as run() solves: with the safety net only where the configuration has it. Its drops
     // of the first solve stay out of the graph; the verdict counts both solves' drops.
     const Plan plan = plan_of(r.config);
+    Publication published = solve_graph(r.submaps, r.dr_poses, r.constraints, r.navigation_noise.graph, r.config, plan);
     if (plan.safety_net) {
-      const std::vector<std::string> dropped = r.safety_net.dropped;
-      solve_with_safety_net(r, r.config);
-      r.safety_net.dropped.insert(r.safety_net.dropped.begin(), dropped.begin(), dropped.end());
-      if (r.safety_net.pass && !r.safety_net.dropped.empty()) {
-        r.safety_net.verdict =
-            format("pass after dropping %.0f registrations", static_cast<double>(r.safety_net.dropped.size()));
+      SafetyNet& net = published.safety_net;
+      net.dropped.insert(net.dropped.begin(), r.safety_net.dropped.begin(), r.safety_net.dropped.end());
+      if (net.pass && !net.dropped.empty()) {
+        net.verdict = format("pass after dropping %.0f registrations", static_cast<double>(net.dropped.size()));
       }
-    } else {
-      r.graph = solve(r.dr_poses, r.constraints, r.navigation_noise.graph);
     }
-    r.optimized_poses = r.graph.poses;
-    evaluate(r, plan);
+    Evaluation evaluated = evaluate(r.submaps, r.dr_poses, published, r.constraints, r.config, plan);
+    take_publication(r, std::move(published), std::move(evaluated));
   }
   // Consistency across the surveys where the seabed did not change.
   const auto changed = [&](const Eigen::Vector2d& p) {

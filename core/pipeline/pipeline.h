@@ -17,25 +17,18 @@
 #include "core/parallel/cancel.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline_config.h"
+#include "core/pipeline/safety_net.h"
 #include "core/submaps/submap.h"
 
 namespace bathyslam {
-
-// What the safety net found after the solve and what it did.
-struct SafetyNet {
-  bool ran = false;
-  bool pass = true;           // the published solution passed
-  bool fell_back = false;     // it did not: dead reckoning was published instead
-  std::string verdict;        // one line for people
-  GraphCheck check;           // of the published solution (or of the last one tried)
-  std::vector<std::string> dropped;  // each edge it dropped, with the reason
-};
 
 struct StageTiming {
   std::string stage;
   double seconds = 0;
 };
 
+// A run's result, assembled from the stages' answers (pipeline.cpp: the register stage's
+// Registrations, the back end's Publication, the Evaluation) once they are all in.
 struct PipelineResult {
   // As run: the lengths of the configuration given scaled to the survey's footprint.
   PipelineConfig config;

@@ -11,31 +11,6 @@
 namespace bathyslam {
 namespace {
 
-PoseGraphEdge edge_of(const Constraint& c) {
-  return {c.from, c.to, c.measured, c.information, !from_navigation(c.type), c.anchor};
-}
-
-// How hard an edge pulls against a solution, in sigmas of its own information on x, y and yaw.
-double horizontal_pull_sigma(const PoseGraphEdge& edge, const std::vector<Eigen::Isometry3d>& poses) {
-  const Eigen::Matrix<double, 6, 1> error = edge_error(edge, poses[edge.from], poses[edge.to]);
-  const Eigen::Vector3d e(error(0), error(1), error(5));
-  return std::sqrt(std::max(0.0, e.dot(xy_yaw_block(edge.information) * e)));
-}
-
-// No registration enters the published map: each says so, so that the report's accepted edges
-// are those the map was made with.
-void publish_dead_reckoning(PipelineResult& r) {
-  r.graph.poses = r.dr_poses;
-  r.optimized_poses = r.dr_poses;
-  for (Constraint& c : r.constraints) {
-    if (!from_navigation(c.type) && c.in_graph()) c.exclusion = {RejectionKind::kSafetyNet, "dead reckoning published instead"};
-  }
-}
-
-std::string describe(const Constraint& c) {
-  return to_string(c.type) + " " + std::to_string(c.from) + "->" + std::to_string(c.to) + " (" + (c.path ? to_string(*c.path) : "odometry") + ")";
-}
-
 // RMS distance from the answer along and across the main line of a scatter Σ o oᵀ / n.
 Eigen::Vector2d spread_of(const Eigen::Matrix2d& scatter) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvalues().cwiseMax(0.0).cwiseSqrt().reverse();
@@ -46,7 +21,7 @@ Eigen::Vector2d spread_of(const Eigen::Matrix2d& scatter) {
 void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                  const PlausibilityConfig& config) {
   if (!c.accepted()) return;
-  const DrInnovation innovation = dr_innovation(edge_of(c), dr, dr_poses);
+  const DrInnovation innovation = dr_innovation(graph_edge(c), dr, dr_poses);
   c.dr_mahalanobis2 = mahalanobis2_xy_yaw(innovation.difference, dr.covariance(c.from, c.to) + innovation.measurement);
   if (c.dr_mahalanobis2 <= config.chi2_threshold) return;
   c.rejection = {RejectionKind::kImplausible, format("Mahalanobis2 %.1f > %.1f over %.0f submaps", c.dr_mahalanobis2,
@@ -83,7 +58,7 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
 
   // The DR gate's statistic for the answer moved by each competitor's offset: the difference
   // from dead reckoning moves by the offset (in `from`'s level frame), its covariance stays.
-  const DrInnovation innovation = dr_innovation(edge_of(c), dr, dr_poses);
+  const DrInnovation innovation = dr_innovation(graph_edge(c), dr, dr_poses);
   const Vector6& difference = innovation.difference;
   const Eigen::LDLT<Eigen::Matrix3d> gate(xy_yaw_block(dr.covariance(c.from, c.to) + innovation.measurement));
   Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets
@@ -179,7 +154,7 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
     if (c.exclusion.kind == RejectionKind::kInconsistent) c.exclusion = {};
     if (!c.in_graph() || !carries_horizontal_information(c.information)) continue;
     owner.push_back(k);
-    candidates.push_back(loop_candidate(edge_of(c), dr_poses));
+    candidates.push_back(loop_candidate(graph_edge(c), dr_poses));
     candidates.back().id = static_cast<int>(k);
   }
   const LoopSelection selection = select_consistent_loops(candidates, dr, config, known);
@@ -197,93 +172,10 @@ GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::ve
   for (const Constraint& c : constraints) {
     // An edge between two held nodes adds a constant to the cost.
     if (c.in_graph() && c.from < nodes && c.to < nodes && std::max(c.from, c.to) >= first_free) {
-      edges.push_back(edge_of(c));
+      edges.push_back(graph_edge(c));
     }
   }
   return optimize_pose_graph(initial, edges, config, first_free);
-}
-
-void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config) {
-  SafetyNet& net = r.safety_net;
-  net = SafetyNet{};
-  net.ran = true;
-  std::vector<int> line_of_node;
-  for (const Submap& s : r.submaps.submaps) line_of_node.push_back(s.line);
-  const auto& robustness = config.robustness;
-  for (int round = 0;; ++round) {
-    std::vector<PoseGraphEdge> edges;
-    std::vector<std::size_t> owner;
-    for (std::size_t k = 0; k < r.constraints.size(); ++k) {
-      if (!r.constraints[k].in_graph()) continue;
-      edges.push_back(edge_of(r.constraints[k]));
-      owner.push_back(k);
-    }
-    r.graph = optimize_pose_graph(r.dr_poses, edges, r.navigation_noise.graph);
-    net.check = check_graph(r.graph.poses, edges, line_of_node, robustness.line_check);
-    int hardest = -1;
-    double hardest_sigma = 0;
-    for (std::size_t e = 0; e < edges.size(); ++e) {
-      if (!edges[e].robust) continue;
-      const double sigma = horizontal_pull_sigma(edges[e], r.graph.poses);
-      if (sigma > hardest_sigma) hardest_sigma = sigma, hardest = static_cast<int>(e);
-    }
-    const bool pulls = hardest_sigma > robustness.max_pull_sigma;
-    if (net.check.pass && !pulls) {
-      net.verdict = net.dropped.empty()
-                        ? "pass: every line within dead reckoning's noise, no registration pulling beyond " +
-                              format("%.0f sigma", robustness.max_pull_sigma)
-                        : format("pass after dropping %.0f registrations", static_cast<double>(net.dropped.size()));
-      return;
-    }
-    if (hardest < 0 || round >= robustness.max_drops) {
-      net.pass = false;
-      net.fell_back = true;
-      net.verdict = format("FAILED after dropping %.0f registrations (%s): published dead reckoning instead",
-                           static_cast<double>(net.dropped.size()),
-                           net.check.pass ? "registrations still pulling against the solution" : "lines bent beyond their noise");
-      publish_dead_reckoning(r);
-      return;
-    }
-    Constraint& worst = r.constraints[owner[hardest]];
-    worst.exclusion = {RejectionKind::kSafetyNet, format("pulled %.1f sigma against the solution", hardest_sigma) +
-                                                      (net.check.pass ? "" : ", lines bent beyond their noise")};
-    net.dropped.push_back(describe(worst) + ": " + worst.exclusion.text());
-  }
-}
-
-namespace {
-
-// How high dead reckoning's p99 could be by the sampling of its cells alone (publish_rule).
-// The block bootstrap re-reads the map, so it runs only where the cheaper bound would refuse.
-double dr_p99_bound(const PipelineResult& r, double solved_p99) {
-  const ConsistencyReport& dr = r.dr_consistency;
-  const int rule = r.config.robustness.publish_rule;
-  if (rule == 0) return dr.stats.p99;
-  const double cells = std::max(dr.stats.p99, dr.p99_upper);
-  if (rule == 1 || solved_p99 <= cells) return cells;
-  const double block_m = median_submap_side_m(r.submaps);
-  if (block_m <= 0) return cells;
-  return std::max(cells, p99_upper_by_blocks(r.submaps, r.dr_poses, r.config.consistency, block_m));
-}
-
-}  // namespace
-
-void fall_back_unless_more_consistent(PipelineResult& r) {
-  const ErrorStats &solved = r.consistency.stats, &dr = r.dr_consistency.stats;
-  const bool whole_map = r.config.robustness.publish_rule >= 1;
-  const bool rmse_no_higher = solved.rmse <= dr.rmse;
-  const double p99_bound = rmse_no_higher ? dr_p99_bound(r, solved.p99) : dr.p99;
-  if (rmse_no_higher && solved.p99 <= p99_bound) return;
-  r.safety_net.pass = false;
-  r.safety_net.fell_back = true;
-  r.safety_net.verdict = format("FAILED: the solved map agrees with itself less than dead reckoning's (consistency RMSE %.3f m "
-                                "against %.3f m, p99 %.3f m against %.3f m%s): published dead reckoning instead",
-                                solved.rmse, dr.rmse, solved.p99, dr.p99,
-                                whole_map && rmse_no_higher
-                                    ? format(", at most %.3f m within its sampling noise", p99_bound).c_str()
-                                    : "");
-  publish_dead_reckoning(r);
-  r.consistency = r.dr_consistency;
 }
 
 }  // namespace bathyslam

@@ -1,13 +1,13 @@
 #pragma once
 // The back end's defences against wrong edges (issue 14): which registrations the graph may
-// believe, and the safety net that checks the solution against dead reckoning's noise before
-// it is published.
+// believe (the safety net that checks the solution before it is published: safety_net.h).
 #include <limits>
 #include <vector>
 
 #include "core/graph/dr_noise.h"
 #include "core/graph/loop_consistency.h"
-#include "core/pipeline/pipeline.h"
+#include "core/pipeline/constraint.h"
+#include "core/pipeline/pipeline_config.h"
 
 namespace bathyslam {
 
@@ -60,21 +60,5 @@ void select_consistent_registrations(std::vector<Constraint>& constraints, const
 // `initial`. With `first_free`, the poses before it are held at `initial` too.
 GraphSolution solve(const std::vector<Eigen::Isometry3d>& initial, const std::vector<Constraint>& constraints,
                     const GraphConfig& config, int nodes = std::numeric_limits<int>::max(), int first_free = 1);
-
-// Solves, then tests the solution (graph_check.h): while a line's odometry residuals fail the
-// chi-square test or a registration pulls beyond `max_pull_sigma`, the hardest-pulling
-// registration is dropped (named in the report) and the graph solved again; when that does not
-// end in a passing solution, dead reckoning is published and the report says so.
-void solve_with_safety_net(PipelineResult& r, const PipelineConfig& config);
-
-// The last test needs no reference: a map is published only when it agrees with itself better
-// than dead reckoning's does as a whole: its consistency RMSE over the cells two lines share no
-// higher, and its p99 no higher than dead reckoning's could be by the sampling of its cells alone
-// (robustness.publish_rule 2: the cells drawn in blocks of a submap, p99_upper_by_blocks; 1: each
-// cell on its own, ConsistencyReport::p99_upper; 0: no higher than dead reckoning's p99).
-// Otherwise the data do not support the solution, and dead reckoning is published, the report
-// saying why.
-// `r.consistency` and `r.dr_consistency` must be filled; the first is replaced on a fall-back.
-void fall_back_unless_more_consistent(PipelineResult& r);
 
 }  // namespace bathyslam

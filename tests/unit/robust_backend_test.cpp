@@ -1,6 +1,8 @@
 // The pipeline's defences against wrong edges, on constraints built by hand: the DR gate, the
 // consistency selection, and the safety net that checks a solution before it is published.
 #include "core/pipeline/robust_backend.h"
+#include "core/pipeline/pipeline.h"
+#include "core/pipeline/safety_net.h"
 
 #include <gtest/gtest.h>
 
@@ -103,29 +105,37 @@ TEST(ConsistencySelection, LeavesOutTheRegistrationsThatDisagreeAndNeverTouchesD
   EXPECT_TRUE(constraints[n - 1].in_graph()) << "an edge without horizontal information cannot bend the survey";
 }
 
+// The safety net over `constraints` on the survey's lines, with the survey's noise model.
+Publication safety_net_on(const Survey2Lines& s, std::vector<Constraint>& constraints,
+                          const PipelineConfig::Robustness& robustness = PipelineConfig{}.robustness) {
+  std::vector<int> lines;
+  for (const Submap& m : s.result.submaps.submaps) lines.push_back(m.line);
+  return solve_with_safety_net(s.result.dr_poses, lines, constraints, s.result.navigation_noise.graph, robustness);
+}
+
 // A wrong edge with the information of a good one, forced past the front end's tests: the
 // safety net finds it pulling against the solution, drops it, and the published trajectory is
 // the one the good edges give.
 TEST(SafetyNet, DropsAConfidentlyWrongEdgeAndPublishesWhatTheGoodEdgesGive) {
   Survey2Lines s = two_lines(20, 3);
   for (int i = 1; i < 19; i += 2) s.result.constraints.push_back(registration(s, i, 39 - i));
-  PipelineResult good = s.result;
-  solve_with_safety_net(good, good.config);
-  ASSERT_TRUE(good.safety_net.pass) << good.safety_net.verdict;
-  EXPECT_TRUE(good.safety_net.dropped.empty());
+  std::vector<Constraint> good = s.result.constraints;
+  const Publication good_solution = safety_net_on(s, good);
+  ASSERT_TRUE(good_solution.safety_net.pass) << good_solution.safety_net.verdict;
+  EXPECT_TRUE(good_solution.safety_net.dropped.empty());
 
   s.result.constraints.push_back(registration(s, 6, 30, 20.0, -10.0, 90 * kDeg));
-  PipelineResult unchecked = s.result;
-  unchecked.graph = solve(unchecked.dr_poses, unchecked.constraints, unchecked.config.graph);
-  PipelineResult checked = s.result;
-  solve_with_safety_net(checked, checked.config);
+  const GraphSolution unchecked = solve(s.result.dr_poses, s.result.constraints, s.result.config.graph);
+  std::vector<Constraint> checked = s.result.constraints;
+  const Publication checked_solution = safety_net_on(s, checked);
 
-  EXPECT_TRUE(checked.safety_net.pass) << checked.safety_net.verdict;
-  ASSERT_EQ(checked.safety_net.dropped.size(), 1u);
-  EXPECT_NE(checked.safety_net.dropped[0].find("6->30"), std::string::npos) << checked.safety_net.dropped[0];
-  EXPECT_FALSE(checked.constraints.back().in_graph());
-  EXPECT_NEAR(max_error(checked.graph.poses, s.truth), max_error(good.graph.poses, s.truth), 1e-6);
-  EXPECT_GT(max_error(unchecked.graph.poses, s.truth), max_error(good.graph.poses, s.truth) + 1.0)
+  EXPECT_TRUE(checked_solution.safety_net.pass) << checked_solution.safety_net.verdict;
+  ASSERT_EQ(checked_solution.safety_net.dropped.size(), 1u);
+  EXPECT_NE(checked_solution.safety_net.dropped[0].find("6->30"), std::string::npos) << checked_solution.safety_net.dropped[0];
+  EXPECT_FALSE(checked.back().in_graph());
+  EXPECT_EQ(checked.back().exclusion.kind, RejectionKind::kSafetyNet);
+  EXPECT_NEAR(max_error(checked_solution.graph.poses, s.truth), max_error(good_solution.graph.poses, s.truth), 1e-6);
+  EXPECT_GT(max_error(unchecked.poses, s.truth), max_error(good_solution.graph.poses, s.truth) + 1.0)
       << "the test needs a wrong edge that does harm";
 }
 
@@ -134,70 +144,76 @@ TEST(SafetyNet, DropsAConfidentlyWrongEdgeAndPublishesWhatTheGoodEdgesGive) {
 TEST(SafetyNet, FallsBackToDeadReckoningWhenNoSolutionPasses) {
   Survey2Lines s = two_lines(20, 4);
   for (int i = 1; i < 19; ++i) s.result.constraints.push_back(registration(s, i, 39 - i, 0.0, 0.0, 25 * kDeg));
-  s.result.config.robustness.max_drops = 3;
-  solve_with_safety_net(s.result, s.result.config);
-  EXPECT_FALSE(s.result.safety_net.pass);
-  EXPECT_TRUE(s.result.safety_net.fell_back);
-  EXPECT_EQ(s.result.safety_net.dropped.size(), 3u);
-  EXPECT_NE(s.result.safety_net.verdict.find("published dead reckoning"), std::string::npos);
-  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(s.result.graph.poses[i].isApprox(s.result.dr_poses[i]));
+  PipelineConfig::Robustness robustness;
+  robustness.max_drops = 3;
+  const Publication published = safety_net_on(s, s.result.constraints, robustness);
+  EXPECT_FALSE(published.safety_net.pass);
+  EXPECT_TRUE(published.safety_net.fell_back);
+  EXPECT_EQ(published.safety_net.dropped.size(), 3u);
+  EXPECT_NE(published.safety_net.verdict.find("published dead reckoning"), std::string::npos);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(published.graph.poses[i].isApprox(s.result.dr_poses[i]));
+  for (const Constraint& c : s.result.constraints) {
+    if (from_navigation(c.type)) continue;
+    EXPECT_FALSE(c.in_graph()) << "the report's accepted edges are the published map's";
+  }
+}
+
+// Consistency reports by hand: dead reckoning's and the solved map's RMSE and p99 (m), and the
+// bound dead reckoning's p99 could reach by the sampling of its cells alone.
+std::pair<ConsistencyReport, ConsistencyReport> maps(double dr_rmse, double dr_p99, double dr_p99_upper, double rmse,
+                                                     double p99) {
+  ConsistencyReport dr, solved;
+  dr.stats.rmse = dr_rmse, dr.stats.p99 = dr_p99, dr.p99_upper = dr_p99_upper;
+  solved.stats.rmse = rmse, solved.stats.p99 = p99;
+  return {dr, solved};
 }
 
 // A solution whose map agrees with itself less than dead reckoning's is not published, whatever
 // the graph said; one that agrees better is.
 TEST(SafetyNet, PublishesDeadReckoningWhenTheSolvedMapIsLessConsistent) {
-  Survey2Lines s = two_lines(10, 5);
-  PipelineResult& r = s.result;
-  r.optimized_poses = s.truth;
-  r.graph.poses = s.truth;
-  r.safety_net.ran = true;
-  r.dr_consistency.stats.rmse = 0.30;
-  r.dr_consistency.stats.p99 = 0.90;
-  r.consistency.stats.rmse = 0.10;
-  r.consistency.stats.p99 = 0.40;
-  fall_back_unless_more_consistent(r);
-  EXPECT_FALSE(r.safety_net.fell_back);
-  EXPECT_TRUE(r.optimized_poses[5].isApprox(s.truth[5]));
+  const Survey2Lines s = two_lines(10, 5);
+  const PipelineConfig config;
+  const auto [dr, better] = maps(0.30, 0.90, 0.0, 0.10, 0.40);
+  EXPECT_FALSE(less_consistent_than_dead_reckoning(better, dr, s.result.submaps, s.result.dr_poses, config));
 
-  r.consistency.stats.p99 = 1.20;  // better on the whole, worse in the tail: not supported
-  fall_back_unless_more_consistent(r);
-  EXPECT_TRUE(r.safety_net.fell_back);
-  EXPECT_FALSE(r.safety_net.pass);
-  EXPECT_NE(r.safety_net.verdict.find("published dead reckoning"), std::string::npos);
-  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(r.optimized_poses[i].isApprox(r.dr_poses[i]));
-  EXPECT_DOUBLE_EQ(r.consistency.stats.rmse, 0.30);
+  const auto [same_dr, tail] = maps(0.30, 0.90, 0.0, 0.10, 1.20);  // better on the whole, worse in the tail
+  const auto why = less_consistent_than_dead_reckoning(tail, same_dr, s.result.submaps, s.result.dr_poses, config);
+  ASSERT_TRUE(why) << "not supported";
+  EXPECT_NE(why->find("published dead reckoning"), std::string::npos);
+
+  Publication published{{s.truth}, {}};
+  std::vector<Constraint> constraints = s.result.constraints;
+  constraints.push_back(registration(s, 3, 16));
+  publish_dead_reckoning(published, s.result.dr_poses, constraints, *why);
+  EXPECT_TRUE(published.safety_net.fell_back);
+  EXPECT_FALSE(published.safety_net.pass);
+  EXPECT_EQ(published.safety_net.verdict, *why);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(published.graph.poses[i].isApprox(s.result.dr_poses[i]));
+  EXPECT_EQ(constraints.back().exclusion.kind, RejectionKind::kSafetyNet);
+  EXPECT_TRUE(constraints.front().in_graph()) << "dead reckoning's own odometry stays";
 }
 
 // The solved map is judged as a whole (robustness.publish_rule 1, each cell its own sample): a p99 a little above dead
 // reckoning's but within what the sampling of its cells allows does not throw away a map whose
 // RMSE fell by a third; beyond that bound, or under the old rule, dead reckoning is published.
 TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
-  Survey2Lines s = two_lines(10, 6);
-  PipelineResult& r = s.result;
-  r.optimized_poses = s.truth;
-  r.graph.poses = s.truth;
-  r.safety_net.ran = true;
-  r.dr_consistency.stats.rmse = 0.30;
-  r.dr_consistency.stats.p99 = 0.90;
-  r.dr_consistency.p99_upper = 0.97;
-  r.consistency.stats.rmse = 0.20;
-  r.consistency.stats.p99 = 0.93;
-  r.config.robustness.publish_rule = 1;
-  PipelineResult whole = r;
-  fall_back_unless_more_consistent(whole);
-  EXPECT_FALSE(whole.safety_net.fell_back) << whole.safety_net.verdict;
-  EXPECT_TRUE(whole.optimized_poses[5].isApprox(s.truth[5]));
+  const Survey2Lines s = two_lines(10, 6);
+  PipelineConfig whole;
+  whole.robustness.publish_rule = 1;
+  const auto [dr, solved] = maps(0.30, 0.90, 0.97, 0.20, 0.93);
+  const auto& submaps = s.result.submaps;
+  const auto& dr_poses = s.result.dr_poses;
+  const auto verdict = less_consistent_than_dead_reckoning(solved, dr, submaps, dr_poses, whole);
+  EXPECT_FALSE(verdict) << *verdict;
 
-  PipelineResult old_rule = r;
-  old_rule.config.robustness.publish_rule = 0;
-  fall_back_unless_more_consistent(old_rule);
-  EXPECT_TRUE(old_rule.safety_net.fell_back);
+  PipelineConfig old_rule;
+  old_rule.robustness.publish_rule = 0;
+  EXPECT_TRUE(less_consistent_than_dead_reckoning(solved, dr, submaps, dr_poses, old_rule));
 
-  PipelineResult beyond = r;
-  beyond.consistency.stats.p99 = 1.00;
-  fall_back_unless_more_consistent(beyond);
-  EXPECT_TRUE(beyond.safety_net.fell_back);
-  EXPECT_NE(beyond.safety_net.verdict.find("sampling noise"), std::string::npos) << beyond.safety_net.verdict;
+  const auto [same_dr, beyond] = maps(0.30, 0.90, 0.97, 0.20, 1.00);
+  const auto why = less_consistent_than_dead_reckoning(beyond, same_dr, submaps, dr_poses, whole);
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("sampling noise"), std::string::npos) << *why;
 }
 
 // A map whose every submap is a little off (each its own pose error) has a p99 that another map
@@ -206,35 +222,30 @@ TEST(SafetyNet, ToleratesAP99RiseWithinDeadReckoningsOwnSamplingNoise) {
 // whose RMSE fell and whose p99 rose within that is published; rule 1 refused it. A map with a
 // blunder (one submap a metre off) is refused by every rule.
 TEST(SafetyNet, WeighsTheP99RiseByTheSubmapsNotTheCells) {
-  PipelineResult r;
-  r.submaps = lines_with_submap_errors(0.1, 0.02, 1);
-  r.dr_poses = poses_of(r.submaps);
-  r.optimized_poses = r.dr_poses;
-  r.graph.poses = r.dr_poses;
-  r.safety_net.ran = true;
-  r.dr_consistency = consistency_error(r.submaps, r.dr_poses, r.config.consistency);
-  const double blocks = p99_upper_by_blocks(r.submaps, r.dr_poses, r.config.consistency,
-                                            median_submap_side_m(r.submaps));
-  ASSERT_GT(blocks, r.dr_consistency.p99_upper);
-  r.consistency.stats.rmse = 0.8 * r.dr_consistency.stats.rmse;
-  r.consistency.stats.p99 = (r.dr_consistency.p99_upper + blocks) / 2;
+  const PipelineConfig by_blocks;
+  const SubmapSet submaps = lines_with_submap_errors(0.1, 0.02, 1);
+  const std::vector<Eigen::Isometry3d> dr_poses = poses_of(submaps);
+  const ConsistencyReport dr = consistency_error(submaps, dr_poses, by_blocks.consistency);
+  const double blocks = p99_upper_by_blocks(submaps, dr_poses, by_blocks.consistency, median_submap_side_m(submaps));
+  ASSERT_GT(blocks, dr.p99_upper);
+  ConsistencyReport solved;
+  solved.stats.rmse = 0.8 * dr.stats.rmse;
+  solved.stats.p99 = (dr.p99_upper + blocks) / 2;
 
-  PipelineResult by_blocks = r;
-  fall_back_unless_more_consistent(by_blocks);
-  EXPECT_FALSE(by_blocks.safety_net.fell_back) << by_blocks.safety_net.verdict;
-  PipelineResult by_cells = r;
-  by_cells.config.robustness.publish_rule = 1;
-  fall_back_unless_more_consistent(by_cells);
-  EXPECT_TRUE(by_cells.safety_net.fell_back);
+  const auto verdict = less_consistent_than_dead_reckoning(solved, dr, submaps, dr_poses, by_blocks);
+  EXPECT_FALSE(verdict) << *verdict;
+  PipelineConfig by_cells;
+  by_cells.robustness.publish_rule = 1;
+  EXPECT_TRUE(less_consistent_than_dead_reckoning(solved, dr, submaps, dr_poses, by_cells));
 
   // Its bound is dead reckoning's map's: the blunder's own map, drawn in blocks, would allow it.
-  PipelineResult blunder = r;
-  blunder.optimized_poses[40].translation().z() += 1.0;
-  blunder.consistency = consistency_error(blunder.submaps, blunder.optimized_poses, blunder.config.consistency);
-  blunder.consistency.stats.rmse = 0.8 * r.dr_consistency.stats.rmse;  // a better map elsewhere
-  fall_back_unless_more_consistent(blunder);
-  EXPECT_TRUE(blunder.safety_net.fell_back);
-  EXPECT_NE(blunder.safety_net.verdict.find("sampling noise"), std::string::npos) << blunder.safety_net.verdict;
+  std::vector<Eigen::Isometry3d> blunder_poses = dr_poses;
+  blunder_poses[40].translation().z() += 1.0;
+  ConsistencyReport blunder = consistency_error(submaps, blunder_poses, by_blocks.consistency);
+  blunder.stats.rmse = 0.8 * dr.stats.rmse;  // a better map elsewhere
+  const auto why = less_consistent_than_dead_reckoning(blunder, dr, submaps, dr_poses, by_blocks);
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("sampling noise"), std::string::npos) << *why;
 }
 
 // A probe result by hand: the answer fits at 1e-3 m², and every offset in `competing` fits
