@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -85,6 +87,10 @@ cv::Mat terrain_standard_deviation(const TerrainGrid& grid, int window) {
 }
 
 std::vector<Keypoint> detect_keypoints(const TerrainGrid& grid, const KeypointConfig& config) {
+  if (config.descriptor_size % 2 == 0) {  // centred on its keypoint: an even side has no centre
+    throw std::invalid_argument("keypoints.descriptor_size: " + std::to_string(config.descriptor_size) +
+                                " is even; the descriptor is centred on its keypoint, so its side must be odd");
+  }
   std::vector<Keypoint> keypoints;
   if (grid.rows() < 3 || grid.cols() < 3 || config.window_scales.empty()) return keypoints;
   std::vector<cv::Mat> tsd;

@@ -15,7 +15,7 @@ namespace bathyslam {
 struct KeypointConfig {  // Table 1 (b)
   std::array<int, 3> window_scales{3, 7, 9};  // TSD windows, cells
   double percentile = 70;                   // keypoints pass this percentile at every scale
-  int descriptor_size = 11;                 // d x d elevation samples
+  int descriptor_size = 11;                 // d x d elevation samples, d odd (centred on the keypoint)
   // A departure from the paper: a per-submap percentile alone selects 30 % of the cells, flat
   // or not, so keypoints must also stand above the sounding noise of a flat bottom
   // (docs/slam-core.md, "Departures from Table 1"); without it the feature density could never fall below the switch threshold.

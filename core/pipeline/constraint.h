@@ -105,11 +105,11 @@ Information6 with_horizontal_spread(Information6 information, const Eigen::Matri
 // along it marginalised out, so that what is left holds whatever the offset there.
 Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction);
 
-// Odometry constraints: consecutive submaps of one survey, DR relative pose, the graph's DR
-// information (Table 1's by default); and each later survey's datum edge from node 0.
 // The constraint as the pose graph's edge; registrations robust, the navigation's own not.
 PoseGraphEdge graph_edge(const Constraint& c);
 
+// Odometry constraints: consecutive submaps of one survey, DR relative pose, the graph's DR
+// information (Table 1's by default); and each later survey's datum edge from node 0.
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph);
 
 }  // namespace bathyslam

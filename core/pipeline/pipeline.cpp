@@ -251,10 +251,7 @@ Evaluation evaluate(const SubmapSet& submaps, const std::vector<Eigen::Isometry3
   e.dr_consistency = consistency_error(submaps, dr_poses, config.consistency);
   e.consistency = consistency_error(submaps, published.graph.poses, config.consistency);
   if (plan.safety_net && !published.safety_net.fell_back) {
-    if (const auto why = less_consistent_than_dead_reckoning(e.consistency, e.dr_consistency, submaps, dr_poses, config)) {
-      publish_dead_reckoning(published, dr_poses, constraints, *why);
-      e.consistency = e.dr_consistency;
-    }
+    fall_back_unless_more_consistent(published, e.consistency, e.dr_consistency, submaps, dr_poses, constraints, config);
   }
   const std::vector<Eigen::Isometry3d>& poses = published.graph.poses;
   if (!submaps.survey_starts.empty()) {

@@ -106,4 +106,14 @@ std::optional<std::string> less_consistent_than_dead_reckoning(const Consistency
                 whole_map && rmse_no_higher ? format(", at most %.3f m within its sampling noise", p99_bound).c_str() : "");
 }
 
+bool fall_back_unless_more_consistent(Publication& published, ConsistencyReport& solved, const ConsistencyReport& dr,
+                                      const SubmapSet& submaps, const std::vector<Eigen::Isometry3d>& dr_poses,
+                                      std::vector<Constraint>& constraints, const PipelineConfig& config) {
+  const auto why = less_consistent_than_dead_reckoning(solved, dr, submaps, dr_poses, config);
+  if (!why) return false;
+  publish_dead_reckoning(published, dr_poses, constraints, *why);
+  solved = dr;
+  return true;
+}
+
 }  // namespace bathyslam

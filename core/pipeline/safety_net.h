@@ -56,4 +56,11 @@ std::optional<std::string> less_consistent_than_dead_reckoning(const Consistency
                                                                const std::vector<Eigen::Isometry3d>& dr_poses,
                                                                const PipelineConfig& config);
 
+// The publication rule on the evaluated map: when `solved` (the map of `published`) is less
+// consistent than dead reckoning's `dr`, dead reckoning is published instead, with the reason,
+// and `solved` becomes dead reckoning's report. Returns whether it fell back.
+bool fall_back_unless_more_consistent(Publication& published, ConsistencyReport& solved, const ConsistencyReport& dr,
+                                      const SubmapSet& submaps, const std::vector<Eigen::Isometry3d>& dr_poses,
+                                      std::vector<Constraint>& constraints, const PipelineConfig& config);
+
 }  // namespace bathyslam

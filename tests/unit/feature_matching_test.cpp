@@ -56,38 +56,68 @@ std::vector<FeatureMatch> plain_matches(const std::vector<Keypoint>& source, con
 
 // Keypoints of two overlapping patches of one mound field, the source's frame shifted by `shift`.
 std::pair<std::vector<Keypoint>, std::vector<Keypoint>> keypoints_of_two_views(int seed, const Eigen::Vector3d& shift,
-                                                                               double noise_m) {
+                                                                               double noise_m,
+                                                                               const KeypointConfig& keypoints = {}) {
   const SyntheticTerrain terrain = SyntheticTerrain::with_mounds(seed);
   Eigen::Isometry3d source_pose = Eigen::Isometry3d::Identity();
   source_pose.translation() = shift;
-  const std::vector<Keypoint> target = detect_keypoints(grid_terrain(terrain.sample(Eigen::Isometry3d::Identity(), noise_m, 1), {}));
-  const std::vector<Keypoint> source = detect_keypoints(grid_terrain(terrain.sample(source_pose, noise_m, 2), {}));
+  const std::vector<Keypoint> target =
+      detect_keypoints(grid_terrain(terrain.sample(Eigen::Isometry3d::Identity(), noise_m, 1), {}), keypoints);
+  const std::vector<Keypoint> source = detect_keypoints(grid_terrain(terrain.sample(source_pose, noise_m, 2), {}), keypoints);
   return {source, target};
 }
 
+void expect_same_matches(const std::vector<FeatureMatch>& fast, const std::vector<FeatureMatch>& plain) {
+  ASSERT_EQ(fast.size(), plain.size());
+  for (std::size_t k = 0; k < fast.size(); ++k) {
+    EXPECT_EQ(fast[k].source, plain[k].source);
+    EXPECT_EQ(fast[k].target, plain[k].target);
+    EXPECT_NEAR(fast[k].mse, plain[k].mse, 1e-12);
+  }
+}
+
 // The matcher skips the scoring of neighbours that cannot beat the second best (a bound from
-// each descriptor's block means and the rest's length): that must not change a single match.
+// each descriptor's block means and the rest's length): that must not change a single match,
+// whatever the descriptor's side (3 and 5: blocks of one sample, or none).
 TEST(FeatureMatching, GivesTheMatchesOfScoringEveryPairInFull) {
   int compared = 0;
   for (int seed = 1; seed <= 2; ++seed) {
     const Eigen::Vector3d shift(2.5 * seed, -1.5, 0);
-    const auto [source, target] = keypoints_of_two_views(seed, shift, 0.02);
+    KeypointConfig keypoints;
+    keypoints.descriptor_size = seed == 1 ? 11 : 5;
+    const auto [source, target] = keypoints_of_two_views(seed, shift, 0.02, keypoints);
     ASSERT_GT(source.size(), 20u);
     Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();
     guess.translation() = shift + Eigen::Vector3d(0.7, -0.4, 0);  // a dead-reckoning guess, off a little
     for (const MatchConfig config : {MatchConfig{}, MatchConfig{8.0, 0.5, 0.95, 30}}) {
       const std::vector<FeatureMatch> fast = match_features(source, target, guess, config);
-      const std::vector<FeatureMatch> plain = plain_matches(source, target, guess, config);
-      ASSERT_EQ(fast.size(), plain.size()) << "seed " << seed;
-      for (std::size_t k = 0; k < fast.size(); ++k) {
-        EXPECT_EQ(fast[k].source, plain[k].source);
-        EXPECT_EQ(fast[k].target, plain[k].target);
-        EXPECT_NEAR(fast[k].mse, plain[k].mse, 1e-12);
-      }
+      expect_same_matches(fast, plain_matches(source, target, guess, config));
       compared += static_cast<int>(fast.size());
     }
   }
   EXPECT_GT(compared, 1000) << "the surveys gave matches to compare";
+}
+
+// Planar patches of one slope direction and different steepness correlate perfectly, and the
+// bound equals their score but for rounding: the tightest case, on 3 x 3 descriptors too.
+TEST(FeatureMatching, PlanarPatchesWhereTheBoundIsTightGiveTheFullMatches) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> steepness(0.5, 2.0), where(-3.0, 3.0);
+  for (const int d : {3, 11}) {
+    Eigen::VectorXf slope(d * d);
+    for (int k = 0; k < d * d; ++k) slope[k] = static_cast<float>(0.1 * (k % d) + 0.03 * (k / d));
+    slope.array() -= slope.mean();
+    std::vector<Keypoint> source(40), target(40);
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      for (Keypoint* k : {&source[i], &target[i]}) {
+        k->position = Eigen::Vector3d(where(rng), where(rng), 10);
+        k->descriptor = static_cast<float>(steepness(rng)) * slope;
+      }
+    }
+    const MatchConfig config{8.0, 0.5, 0.999, 3};
+    expect_same_matches(match_features(source, target, Eigen::Isometry3d::Identity(), config),
+                        plain_matches(source, target, Eigen::Isometry3d::Identity(), config));
+  }
 }
 
 // The same ground seen from a frame 6 m away: the matches join keypoints at the same place.

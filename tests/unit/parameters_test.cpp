@@ -51,7 +51,9 @@ TEST(Parameters, BadNamesAndValuesAreRejectedByName) {
   EXPECT_THAT(message("registration.gicp.max_iterations", "-3"), HasSubstr("is outside"));
   EXPECT_THAT(message("voxel.leaf_x_m", "0.2m"), HasSubstr("'0.2m' is not a number"));
   EXPECT_THAT(message("voxel.leaf_x_m", ""), HasSubstr("'' is not a number"));
+  EXPECT_THAT(message("keypoints.descriptor_size", "8"), HasSubstr("is even"));  // it would have no centre
   EXPECT_EQ(config.registration.gicp.max_iterations, 300) << "a rejected value changes nothing";
+  EXPECT_EQ(config.keypoints.descriptor_size, 11);
 }
 
 TEST(Parameters, StoredNumbersAndNameValueArgumentsGoThroughTheSameChecks) {

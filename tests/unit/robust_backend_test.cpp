@@ -181,14 +181,26 @@ TEST(SafetyNet, PublishesDeadReckoningWhenTheSolvedMapIsLessConsistent) {
   ASSERT_TRUE(why) << "not supported";
   EXPECT_NE(why->find("published dead reckoning"), std::string::npos);
 
-  Publication published{{s.truth}, {}};
+  // What the evaluation does with that verdict: the solved map published when supported,
+  // dead reckoning (its poses, its map's report, every registration out) when not.
   std::vector<Constraint> constraints = s.result.constraints;
   constraints.push_back(registration(s, 3, 16));
-  publish_dead_reckoning(published, s.result.dr_poses, constraints, *why);
+  Publication kept{{s.truth}, {}};
+  ConsistencyReport kept_map = better;
+  EXPECT_FALSE(fall_back_unless_more_consistent(kept, kept_map, dr, s.result.submaps, s.result.dr_poses, constraints, config));
+  EXPECT_TRUE(kept.graph.poses[5].isApprox(s.truth[5]));
+  EXPECT_DOUBLE_EQ(kept_map.stats.rmse, 0.10);
+  EXPECT_TRUE(constraints.back().in_graph());
+
+  Publication published{{s.truth}, {}};
+  ConsistencyReport published_map = tail;
+  EXPECT_TRUE(fall_back_unless_more_consistent(published, published_map, same_dr, s.result.submaps, s.result.dr_poses,
+                                               constraints, config));
   EXPECT_TRUE(published.safety_net.fell_back);
   EXPECT_FALSE(published.safety_net.pass);
   EXPECT_EQ(published.safety_net.verdict, *why);
   for (std::size_t i = 0; i < s.truth.size(); ++i) EXPECT_TRUE(published.graph.poses[i].isApprox(s.result.dr_poses[i]));
+  EXPECT_DOUBLE_EQ(published_map.stats.rmse, 0.30) << "the report is dead reckoning's map's";
   EXPECT_EQ(constraints.back().exclusion.kind, RejectionKind::kSafetyNet);
   EXPECT_TRUE(constraints.front().in_graph()) << "dead reckoning's own odometry stays";
 }
