@@ -86,10 +86,14 @@ cv::Mat terrain_standard_deviation(const TerrainGrid& grid, int window) {
   return tsd;
 }
 
+std::optional<std::string> descriptor_size_fault(int descriptor_size) {
+  if (descriptor_size % 2 != 0) return std::nullopt;
+  return "is even; the descriptor is centred on its keypoint, so its side must be odd";
+}
+
 std::vector<Keypoint> detect_keypoints(const TerrainGrid& grid, const KeypointConfig& config) {
-  if (config.descriptor_size % 2 == 0) {  // centred on its keypoint: an even side has no centre
-    throw std::invalid_argument("keypoints.descriptor_size: " + std::to_string(config.descriptor_size) +
-                                " is even; the descriptor is centred on its keypoint, so its side must be odd");
+  if (const auto fault = descriptor_size_fault(config.descriptor_size)) {
+    throw std::invalid_argument("keypoints.descriptor_size: " + std::to_string(config.descriptor_size) + " " + *fault);
   }
   std::vector<Keypoint> keypoints;
   if (grid.rows() < 3 || grid.cols() < 3 || config.window_scales.empty()) return keypoints;

@@ -3,6 +3,8 @@
 // their rotation-normalised elevation descriptors.
 #include <array>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,6 +36,10 @@ struct KeypointConfig {  // Table 1 (b)
     field("orientation_bins", orientation_bins, 4, 360);
   }
 };
+
+// Why `descriptor_size` cannot make a descriptor, or nullopt: the descriptor is centred on its
+// keypoint, so an even side (no centre) cannot.
+std::optional<std::string> descriptor_size_fault(int descriptor_size);
 
 struct Keypoint {
   Eigen::Vector3d position;  // submap frame (x, y, z down), z from the grid

@@ -86,10 +86,10 @@ std::vector<BestMatch> one_way(const Side& queries, const Side& indexed, const M
     // ratio test refuses the match whichever comes first (sorting was 5 % of `large`'s CPU).
     tree.within(q, config.max_distance_m, near, sq_distances, false);
     double second = std::numeric_limits<double>::infinity();
+    const Eigen::Index size = queries.keypoints[i].descriptor.size();
     for (int j : near) {
       // A pair that cannot beat the second best changes nothing. The margin keeps rounding out:
       // descriptor_mse subtracts in float, up to ~1e-7 of the score below the exact difference.
-      const Eigen::Index size = queries.keypoints[i].descriptor.size();
       if (mse_lower_bound(queries.summaries[i], indexed.summaries[j], size) * (1 - 1e-6) >= second) continue;
       const double mse = descriptor_mse(queries.keypoints[i].descriptor, indexed.keypoints[j].descriptor, second);
       // Neither the best nor the second best can change (best <= second), so the costlier

@@ -72,10 +72,11 @@ void assign_parameter(PipelineConfig& config, const std::string& given_name, std
                                   std::to_string(min) + ", " + std::to_string(max) + "]" +
                                   (integer ? " or not an integer" : ""));
     }
-    // A descriptor is centred on its keypoint (tsd_keypoints.cpp): an even side has no centre.
-    if (name == "keypoints.descriptor_size" && static_cast<long long>(v) % 2 == 0) {
-      throw std::invalid_argument("parameter '" + given_name + "': " + shown +
-                                  " is even; the descriptor is centred on its keypoint, so its side must be odd");
+    // The one field whose valid values are not a range (tsd_keypoints.h).
+    if (name == "keypoints.descriptor_size") {
+      if (const auto fault = descriptor_size_fault(static_cast<int>(v))) {
+        throw std::invalid_argument("parameter '" + given_name + "': " + shown + " " + *fault);
+      }
     }
     if constexpr (std::is_enum_v<Field>) {
       field = static_cast<Field>(static_cast<std::underlying_type_t<Field>>(v));

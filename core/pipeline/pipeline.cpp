@@ -14,7 +14,6 @@
 #include "core/parallel/parallel_for.h"
 #include "core/pipeline/register_pairs.h"
 #include "core/pipeline/robust_backend.h"
-#include "core/types/format.h"
 #include "core/types/survey_starts.h"
 
 namespace bathyslam {
@@ -172,12 +171,11 @@ class NavigationNoiseTracker {
 // registered from that prediction, and the graph is solved before the next batch. A pair's
 // guess then carries the drift of one batch rather than of everything between its two
 // submaps, which across a lawnmower is tens of metres, far outside GICP's basin. Without
-// batches, one batch of every submap: every guess straight from dead reckoning. `registered`
-// holds dead reckoning's odometry and the prior's noise when it starts.
-Registrations register_incrementally(Registrations registered, const SubmapSet& submaps, const RegistrationInputs& inputs,
+// batches, one batch of every submap: every guess straight from dead reckoning. `r` holds dead
+// reckoning's odometry and the prior's noise when it starts.
+Registrations register_incrementally(Registrations r, const SubmapSet& submaps, const RegistrationInputs& inputs,
                                      DrNoiseModel& dr, const PipelineConfig& config, const Plan& plan,
                                      const ProgressFn& progress, const std::atomic<bool>* cancel) {
-  Registrations& r = registered;
   const std::vector<Eigen::Isometry3d>& dr_poses = inputs.dr_poses;
   NavigationNoiseTracker noise(config);
   const int n = static_cast<int>(dr_poses.size());
@@ -218,7 +216,7 @@ Registrations register_incrementally(Registrations registered, const SubmapSet& 
     }
     if (progress) progress("register", static_cast<double>(end) / n);
   }
-  return registered;
+  return r;
 }
 
 std::vector<int> line_of_node(const SubmapSet& submaps) {
@@ -425,13 +423,7 @@ int discount_change_across_surveys(PipelineResult& r, const FuseConfig& fuse, co
     // of the first solve stay out of the graph; the verdict counts both solves' drops.
     const Plan plan = plan_of(r.config);
     Publication published = solve_graph(r.submaps, r.dr_poses, r.constraints, r.navigation_noise.graph, r.config, plan);
-    if (plan.safety_net) {
-      SafetyNet& net = published.safety_net;
-      net.dropped.insert(net.dropped.begin(), r.safety_net.dropped.begin(), r.safety_net.dropped.end());
-      if (net.pass && !net.dropped.empty()) {
-        net.verdict = format("pass after dropping %.0f registrations", static_cast<double>(net.dropped.size()));
-      }
-    }
+    if (plan.safety_net) count_earlier_drops(published.safety_net, r.safety_net);
     Evaluation evaluated = evaluate(r.submaps, r.dr_poses, published, r.constraints, r.config, plan);
     take_publication(r, std::move(published), std::move(evaluated));
   }

@@ -32,6 +32,10 @@ double dr_p99_bound(const ConsistencyReport& dr, double solved_p99, const Submap
   return std::max(cells, p99_upper_by_blocks(submaps, dr_poses, config.consistency, block_m));
 }
 
+std::string pass_after_drops(std::size_t dropped) {
+  return format("pass after dropping %.0f registrations", static_cast<double>(dropped));
+}
+
 }  // namespace
 
 Publication solve_with_safety_net(const std::vector<Eigen::Isometry3d>& dr_poses, const std::vector<int>& line_of_node,
@@ -62,7 +66,7 @@ Publication solve_with_safety_net(const std::vector<Eigen::Isometry3d>& dr_poses
       net.verdict = net.dropped.empty()
                         ? "pass: every line within dead reckoning's noise, no registration pulling beyond " +
                               format("%.0f sigma", robustness.max_pull_sigma)
-                        : format("pass after dropping %.0f registrations", static_cast<double>(net.dropped.size()));
+                        : pass_after_drops(net.dropped.size());
       return published;
     }
     if (hardest < 0 || round >= robustness.max_drops) {
@@ -78,6 +82,11 @@ Publication solve_with_safety_net(const std::vector<Eigen::Isometry3d>& dr_poses
                                                       (net.check.pass ? "" : ", lines bent beyond their noise")};
     net.dropped.push_back(describe(worst) + ": " + worst.exclusion.text());
   }
+}
+
+void count_earlier_drops(SafetyNet& net, const SafetyNet& earlier) {
+  net.dropped.insert(net.dropped.begin(), earlier.dropped.begin(), earlier.dropped.end());
+  if (net.pass && !net.dropped.empty()) net.verdict = pass_after_drops(net.dropped.size());
 }
 
 void publish_dead_reckoning(Publication& published, const std::vector<Eigen::Isometry3d>& dr_poses,

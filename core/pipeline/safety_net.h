@@ -39,6 +39,10 @@ Publication solve_with_safety_net(const std::vector<Eigen::Isometry3d>& dr_poses
                                   std::vector<Constraint>& constraints, const GraphConfig& graph,
                                   const PipelineConfig::Robustness& robustness);
 
+// `net`, of a graph solved again after an earlier solve (`earlier`) had dropped edges from it:
+// the earlier drops listed first, and a pass counts both solves' drops.
+void count_earlier_drops(SafetyNet& net, const SafetyNet& earlier);
+
 // Dead reckoning instead of `published`, for the reason `verdict` gives. No registration enters
 // the published map: each in `constraints` says so, so that the report's accepted edges are those
 // the map was made with.

@@ -158,6 +158,28 @@ TEST(SafetyNet, FallsBackToDeadReckoningWhenNoSolutionPasses) {
   }
 }
 
+// A graph solved again after the safety net had dropped edges (the change discount): the verdict
+// of a pass counts both solves' drops, the first solve's listed first; a failure keeps its words.
+TEST(SafetyNet, ASecondSolveCountsTheFirstOnesDrops) {
+  SafetyNet earlier;
+  earlier.dropped = {"loop 3->40: pulled 7.0 sigma", "loop 5->38: pulled 6.5 sigma"};
+  SafetyNet passed;
+  passed.pass = true;
+  passed.verdict = "pass: every line within dead reckoning's noise";
+  passed.dropped = {"loop 9->31: pulled 6.2 sigma"};
+  count_earlier_drops(passed, earlier);
+  ASSERT_EQ(passed.dropped.size(), 3u);
+  EXPECT_EQ(passed.dropped.front(), earlier.dropped.front());
+  EXPECT_EQ(passed.verdict, "pass after dropping 3 registrations");
+
+  SafetyNet failed;
+  failed.pass = false;
+  failed.verdict = "FAILED after dropping 0 registrations: published dead reckoning instead";
+  count_earlier_drops(failed, earlier);
+  EXPECT_EQ(failed.dropped.size(), 2u);
+  EXPECT_EQ(failed.verdict, "FAILED after dropping 0 registrations: published dead reckoning instead");
+}
+
 // Consistency reports by hand: dead reckoning's and the solved map's RMSE and p99 (m), and the
 // bound dead reckoning's p99 could reach by the sampling of its cells alone.
 std::pair<ConsistencyReport, ConsistencyReport> maps(double dr_rmse, double dr_p99, double dr_p99_upper, double rmse,
