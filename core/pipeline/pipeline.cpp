@@ -130,6 +130,7 @@ struct Registrations {
   NavigationNoiseEstimate navigation_noise;
   int batch_solves = 0;  // the graph solves between batches, and their time
   double batch_solve_seconds = 0;
+  int batches = 0, batches_taken_up = 0;  // of them, registered by an earlier run (checkpoints)
 };
 
 // Estimates the survey's DR noise from the registrations so far when they have grown by a
@@ -166,6 +167,24 @@ class NavigationNoiseTracker {
   double estimated_from_ = 0;  // innovations at the last estimate
 };
 
+// The batch [begin, end) as an earlier run of the job registered it, when it registered these
+// very candidates (the same pairs in the same order: the run before was this run, up to here);
+// nullptr otherwise.
+const RegisteredBatch* taken_up(const RegistrationCheckpoints* checkpoints, int begin, int end,
+                                const std::vector<Candidate>& candidates) {
+  if (!checkpoints) return nullptr;
+  for (const RegisteredBatch& stored : checkpoints->stored) {
+    if (stored.begin != begin || stored.end != end || stored.constraints.size() != candidates.size()) continue;
+    bool same = true;
+    for (std::size_t k = 0; k < candidates.size() && same; ++k) {
+      const Constraint& c = stored.constraints[k];
+      same = c.type == candidates[k].type && c.from == candidates[k].pair.target && c.to == candidates[k].pair.source;
+    }
+    if (same) return &stored;
+  }
+  return nullptr;
+}
+
 // Registration in survey order, a batch of submaps at a time, as a vehicle would map: each
 // batch is predicted by dead reckoning from the trajectory corrected so far, its candidates are
 // registered from that prediction, and the graph is solved before the next batch. A pair's
@@ -175,7 +194,8 @@ class NavigationNoiseTracker {
 // reckoning's odometry and the prior's noise when it starts.
 Registrations register_incrementally(Registrations r, const SubmapSet& submaps, const RegistrationInputs& inputs,
                                      DrNoiseModel& dr, const PipelineConfig& config, const Plan& plan,
-                                     const ProgressFn& progress, const std::atomic<bool>* cancel) {
+                                     const ProgressFn& progress, const std::atomic<bool>* cancel,
+                                     const RegistrationCheckpoints* checkpoints) {
   const std::vector<Eigen::Isometry3d>& dr_poses = inputs.dr_poses;
   NavigationNoiseTracker noise(config);
   const int n = static_cast<int>(dr_poses.size());
@@ -191,7 +211,15 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
       estimate[s] = estimate[previous] * (dr_poses[previous].inverse() * dr_poses[s]);
     }
     const std::vector<Candidate> candidates = candidates_ending_in(submaps, estimate, begin, end, config.candidates, plan);
-    for (Constraint& c : register_pairs(candidates, estimate, inputs, config, plan, cancel)) r.constraints.push_back(c);
+    ++r.batches;
+    if (const RegisteredBatch* stored = taken_up(checkpoints, begin, end, candidates)) {
+      r.constraints.insert(r.constraints.end(), stored->constraints.begin(), stored->constraints.end());
+      ++r.batches_taken_up;
+    } else {
+      RegisteredBatch registered{begin, end, register_pairs(candidates, estimate, inputs, config, plan, cancel)};
+      if (checkpoints && checkpoints->keep) checkpoints->keep(registered);
+      r.constraints.insert(r.constraints.end(), registered.constraints.begin(), registered.constraints.end());
+    }
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
     if (plan.estimate_noise) noise.update(r, dr_poses, dr, known_conflicts, plan, end == n);
     if (plan.consistency) {
@@ -281,7 +309,8 @@ void take_publication(PipelineResult& r, Publication published, Evaluation evalu
 // `built_since`: when the making of `built` began, for the "submaps" stage's time. Each stage
 // returns its answer; the result is assembled from them at the end.
 PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_since, const PipelineConfig& given,
-                   const ProgressFn& progress, const std::atomic<bool>* cancel) {
+                   const ProgressFn& progress, const std::atomic<bool>* cancel,
+                   const RegistrationCheckpoints* checkpoints) {
   auto report = [&](std::string_view stage, double fraction) {
     if (progress) progress(stage, fraction);
   };
@@ -327,7 +356,7 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
     };
     GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp);
     registered = register_incrementally(std::move(registered), submaps, {clouds, prepared, features, dr_poses, dr}, dr,
-                                        config, plan, progress, cancel);
+                                        config, plan, progress, cancel, checkpoints);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) {
     return_freed_memory();
@@ -354,6 +383,8 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
   r.navigation_noise = std::move(registered.navigation_noise);
   r.batch_solves = registered.batch_solves;
   r.batch_solve_seconds = registered.batch_solve_seconds;
+  r.batches = registered.batches;
+  r.batches_taken_up = registered.batches_taken_up;
   take_publication(r, std::move(published), std::move(evaluated));
   r.timings = std::move(timings);
   return r;
@@ -449,15 +480,16 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config, 
                             const std::atomic<bool>* cancel) {
   const auto start = std::chrono::steady_clock::now();
   if (progress) progress("submaps", 0);
-  return run(build_submaps(survey, config.submaps), start, config, progress, cancel);
+  return run(build_submaps(survey, config.submaps), start, config, progress, cancel, nullptr);
 }
 
 PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
-                            const ProgressFn& progress, const std::atomic<bool>* cancel) {
+                            const ProgressFn& progress, const std::atomic<bool>* cancel,
+                            const RegistrationCheckpoints* checkpoints) {
   const auto built_since = std::chrono::steady_clock::now() -
                            std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                std::chrono::duration<double>(submaps_seconds));
-  return run(std::move(submaps), built_since, config, progress, cancel);
+  return run(std::move(submaps), built_since, config, progress, cancel, checkpoints);
 }
 
 }  // namespace bathyslam

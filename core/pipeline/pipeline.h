@@ -17,6 +17,7 @@
 #include "core/parallel/cancel.h"
 #include "core/pipeline/parameters.h"
 #include "core/pipeline/pipeline_config.h"
+#include "core/pipeline/registration_checkpoint.h"
 #include "core/pipeline/safety_net.h"
 #include "core/submaps/submap.h"
 
@@ -57,6 +58,8 @@ struct PipelineResult {
   // graph costs, in the report's "graph" section).
   int batch_solves = 0;
   double batch_solve_seconds = 0;
+  // The register stage's batches, and how many of them an earlier run's checkpoints gave.
+  int batches = 0, batches_taken_up = 0;
 };
 
 using ProgressFn = std::function<void(std::string_view stage, double fraction)>;
@@ -67,9 +70,12 @@ PipelineResult run_pipeline(const Survey& survey, const PipelineConfig& config,
 
 // The same from submaps the caller built (build_submaps with `config.submaps`, or a reader
 // streaming the pings into a SubmapBuilder, so that a survey's soundings are never held twice:
-// docs/performance.md); `submaps_seconds`, the time that took, is the "submaps" stage's.
+// docs/performance.md); `submaps_seconds`, the time that took, is the "submaps" stage's. With
+// `checkpoints`, the register stage takes up the batches an earlier run of the same job stored
+// and hands each batch it registers itself to `checkpoints->keep` (registration_checkpoint.h).
 PipelineResult run_pipeline(SubmapSet submaps, double submaps_seconds, const PipelineConfig& config,
-                            const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
+                            const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr,
+                            const RegistrationCheckpoints* checkpoints = nullptr);
 
 // Several surveys: a registration across two surveys whose overlap, at the solution, holds enough
 // significant change (its mean over the overlap beyond the registration's vertical sigma) keeps

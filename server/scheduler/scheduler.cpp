@@ -229,6 +229,36 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
   });
 }
 
+// Jobs that resume (docs/service.md): the batches an earlier attempt stored are taken up where
+// they are still this run's (the pipeline checks each against its candidates); bytes this build
+// cannot read are registered again. Each batch registered is stored under the lease as it comes:
+// a lost lease stops the job there, a database away costs only that checkpoint.
+RegistrationCheckpoints Scheduler::checkpoints(const storage::Lease& lease, const std::atomic<bool>& cancel) {
+  const long long id = lease.job_id;
+  const std::string name = "job " + std::to_string(id);
+  RegistrationCheckpoints checkpoints;
+  const std::vector<storage::Bytes> stored = retry_transient(name + ": loading its checkpoints", options_.retry, cancel,
+                                                             [&] { return results_.load_checkpoints(id); });
+  for (const storage::Bytes& bytes : stored) {
+    try {
+      checkpoints.stored.push_back(batch_from_checkpoint(bytes));
+    } catch (const CheckpointError& error) {
+      log("job %lld: a stored checkpoint is not read (%s); its batch is registered again", id, error.what());
+    }
+  }
+  auto writes = std::make_shared<FailureStreak>(name + ": storing a checkpoint");
+  checkpoints.keep = [this, lease, writes](const RegisteredBatch& batch) {
+    try {
+      results_.fenced(lease).save_checkpoint(lease.job_id, batch.begin, batch.end, checkpoint_bytes(batch));
+      writes->succeeded();
+    } catch (const storage::DatabaseError& error) {
+      if (!error.transient()) throw;
+      writes->failed(error.what());
+    }
+  };
+  return checkpoints;
+}
+
 void Scheduler::run(const storage::ClaimedJob& job) {
   const storage::Lease& lease = job.lease;
   const long long id = lease.job_id;
@@ -283,6 +313,7 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     const Survey& survey = input.survey;
     event("load", 1, std::to_string(input.pings) + " pings");
 
+    const RegistrationCheckpoints checkpoints = this->checkpoints(lease, cancel);
     // Progress: every stage change, and within a stage at most every `progress_every`.
     std::string last_stage;
     auto last_event = Clock::now();
@@ -295,7 +326,10 @@ void Scheduler::run(const storage::ClaimedJob& job) {
           last_event = Clock::now();
           event(std::string(stage), fraction);
         },
-        &cancel);
+        &cancel, &checkpoints);
+    if (result.batches_taken_up > 0)
+      log("job %lld: took up %d of %d registered batches from an earlier attempt", id, result.batches_taken_up,
+          result.batches);
     if (!job.more_survey_ids.empty()) event("change", 0, "registrations across surveys over a change of the seabed");
     discount_change_across_surveys(result, input.fuse, DifferenceConfig{});
     throw_if_cancelled(&cancel);

@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/pipeline/registration_checkpoint.h"
 #include "core/products/difference_products.h"
 #include "server/scheduler/map_products.h"
 #include "server/scheduler/retry.h"
@@ -58,6 +59,8 @@ class Scheduler {
              const std::vector<std::filesystem::path>& corrected_gsfs, const SiteDifferences& differences,
              const nlohmann::json& failed_products,
              const std::function<void(const char*, double)>& event, const std::atomic<bool>& cancel);
+  // What an earlier attempt of the job registered, and where this attempt keeps what it registers.
+  RegistrationCheckpoints checkpoints(const storage::Lease& lease, const std::atomic<bool>& cancel);
   void release(const storage::Lease& lease, double seconds);
   void requeue_after_outage(const storage::Lease& lease, double seconds, const std::string& error,
                             storage::Outage outage);

@@ -443,7 +443,8 @@ namespace {
 // Everything a job stored, inside the caller's transaction.
 void delete_results(Connection& connection, std::int64_t job_id) {
   // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
-  for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
+  for (const char* table :
+       {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps", "job_checkpoints"})
     connection.exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
   connection.exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
 }
@@ -489,6 +490,25 @@ std::optional<Report> ResultStore::load_report(std::int64_t job_id) {
   Result plots = connection->exec("SELECT name, png FROM report_plots WHERE job_id = $1", {job_id});
   for (int row = 0; row < plots.rows(); ++row) report.plots[std::string(plots.text(row, "name"))] = plots.bytes(row, "png");
   return report;
+}
+
+void ResultStore::save_checkpoint(std::int64_t job_id, int batch_begin, int batch_end, const Bytes& bytes) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
+  connection->exec(
+      "INSERT INTO job_checkpoints (job_id, batch_begin, batch_end, data) VALUES ($1, $2, $3, $4)"
+      " ON CONFLICT (job_id, batch_begin) DO UPDATE SET batch_end = EXCLUDED.batch_end, data = EXCLUDED.data",
+      {job_id, batch_begin, batch_end, bytes});
+  transaction.commit();
+}
+
+std::vector<Bytes> ResultStore::load_checkpoints(std::int64_t job_id) {
+  auto connection = pool_.acquire();
+  const Result rows = connection->exec("SELECT data FROM job_checkpoints WHERE job_id = $1 ORDER BY batch_begin", {job_id});
+  std::vector<Bytes> batches;
+  for (int row = 0; row < rows.rows(); ++row) batches.push_back(rows.bytes(row, "data"));
+  return batches;
 }
 
 }  // namespace bathyslam::storage

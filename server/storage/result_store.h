@@ -100,6 +100,12 @@ class ResultStore {
   void save_report(std::int64_t job_id, const Report& report);
   std::optional<Report> load_report(std::int64_t job_id);
 
+  // The register stage's batches as a running job registers them (core/pipeline/
+  // registration_checkpoint.h), for its next attempt to take up: `bytes` replaces a batch of the
+  // same start. Removed with the job's other results (discard).
+  void save_checkpoint(std::int64_t job_id, int batch_begin, int batch_end, const Bytes& bytes);
+  std::vector<Bytes> load_checkpoints(std::int64_t job_id);  // by batch start
+
   // Removes everything the job stored, in one transaction: an attempt stopped halfway through
   // storing (server stopped, lease lost) leaves rows that the next attempt's saves would collide with.
   void discard(std::int64_t job_id);

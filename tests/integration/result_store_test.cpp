@@ -257,6 +257,32 @@ TEST(ResultStore, AnAttemptStoppedWhileStoringLeavesNothingTheNextOneCollidesWit
   EXPECT_TRUE(f.results.load_report(other));
 }
 
+// Jobs that resume: a running attempt stores each registered batch under its lease; the next
+// attempt reads them back by batch start; the store's discard (its first step) and a cancel remove them.
+TEST(ResultStore, CheckpointsAreKeptUnderTheLeaseForTheNextAttempt) {
+  JobFixture f;
+  f.pool.acquire()->exec("UPDATE jobs SET max_attempts = 2");
+  std::optional<ClaimedJob> first = f.jobs.claim("first");
+  ASSERT_TRUE(first);
+  ResultStore running = f.results.fenced(first->lease);
+  running.save_checkpoint(f.job, 12, 24, {4, 5, 6});
+  running.save_checkpoint(f.job, 0, 12, {1, 2});
+  running.save_checkpoint(f.job, 12, 24, {7, 8, 9});  // the same batch registered again replaces it
+  EXPECT_EQ(f.results.load_checkpoints(f.job), (std::vector<Bytes>{{1, 2}, {7, 8, 9}}));
+
+  f.pool.acquire()->exec("UPDATE jobs SET lease_expires_at = now() - interval '1 s' WHERE id = $1", {f.job});
+  ASSERT_EQ(f.jobs.reap(), 1);
+  EXPECT_THROW(running.save_checkpoint(f.job, 24, 36, {1}), LeaseLost);  // no longer its job
+  std::optional<ClaimedJob> second = f.jobs.claim("second");
+  ASSERT_TRUE(second);
+  EXPECT_EQ(f.results.load_checkpoints(f.job).size(), 2u);  // what the next attempt takes up
+  ResultStore next = f.results.fenced(second->lease);
+  next.save_checkpoint(f.job, 24, 36, {3});
+  next.discard(f.job);
+  EXPECT_TRUE(f.results.load_checkpoints(f.job).empty());
+  EXPECT_THROW(next.save_checkpoint(f.job, 5, 5, {1}), DatabaseError);  // an empty batch
+}
+
 // A worker whose lease was reaped while it stored must neither add to nor discard the results
 // of the attempt that took the job over.
 TEST(ResultStore, AWorkerThatLostItsLeaseWritesNothing) {
@@ -302,11 +328,13 @@ TEST(ResultStore, OnlyACancelledJobsResultsAreWithdrawn) {
   fenced.save_submaps(f.job, {a_submap(0, true)});
   fenced.put_tile(f.job, {"png", 0, 0, 0}, {1});
   fenced.save_report(f.job, {{{"ok", true}}, {}});
+  fenced.save_checkpoint(f.job, 0, 12, {1});
 
   EXPECT_FALSE(f.results.discard_if_cancelled(f.job));
   EXPECT_EQ(f.results.load_submaps(f.job).size(), 1u);
   ASSERT_TRUE(f.jobs.cancel(f.job));
   EXPECT_TRUE(f.results.discard_if_cancelled(f.job));
+  EXPECT_TRUE(f.results.load_checkpoints(f.job).empty());
   EXPECT_TRUE(f.results.load_submaps(f.job).empty());
   EXPECT_TRUE(f.results.tiles(f.job).empty());
   EXPECT_EQ(f.results.load_report(f.job), std::nullopt);

@@ -4,6 +4,7 @@ and finish the work it took. The same environment as service_api_test.py (set by
 Server and helpers this reuses: a real bathyslam-server on a real PostgreSQL."""
 import hashlib
 import os
+import re
 import signal
 import subprocess
 import time
@@ -159,8 +160,9 @@ class ReflectionTest(unittest.TestCase):
 
 class KilledServerTest(unittest.TestCase):
     """Two servers on one database; the one running a job is killed outright (SIGKILL: no
-    give-back). The other reaps the job once its lease expires and finishes it with the poses of
-    an undisturbed run. A 5 s lease keeps the test short."""
+    give-back) in its register stage, once it has stored a registered batch. The other reaps the
+    job once its lease expires, takes up the batches the killed one stored (jobs that resume) and
+    finishes it with the poses of an undisturbed run. A 5 s lease keeps the test short."""
 
     def setUp(self):
         self.first = Server(args=["--lease-seconds", "5"])
@@ -175,6 +177,11 @@ class KilledServerTest(unittest.TestCase):
         # The second server starts once the first holds the job, so that it is the first's to lose.
         second = Server(args=["--lease-seconds", "5"], db=self.first.db)
         self.addCleanup(second.stop)
+        stored = f"SELECT count(*) FROM job_checkpoints WHERE job_id = {job.id}"
+        deadline = time.monotonic() + 60
+        while int(psql(self.first.url, stored)) == 0:
+            self.assertLess(time.monotonic(), deadline, "no registered batch stored in 60 s")
+            time.sleep(0.05)
         self.first.channel.close()
         self.first.process.kill()
         self.first.process.wait(timeout=30)
@@ -185,7 +192,11 @@ class KilledServerTest(unittest.TestCase):
         self.assertEqual(ended.state, job_pb2.SUCCEEDED, ended.error + log)
         self.assertEqual(ended.attempts, 2, log)
         self.assertIn(f"job {job.id}: claimed by", log)
-        print(f"\nkilled server's job finished by the other {time.monotonic() - killed:.1f} s after the kill", flush=True)
+        self.assertRegex(log, rf"job {job.id}: took up [1-9][0-9]* of [0-9]+ registered batches from an earlier attempt")
+        self.assertEqual(psql(self.first.url, stored), "0", "the checkpoints go once the results are stored")
+        attempt = re.search(rf"job {job.id}: succeeded in ([0-9.]+) s", log)
+        print(f"\nkilled server's job finished by the other {time.monotonic() - killed:.1f} s after the kill"
+              f" (its attempt took {attempt.group(1) if attempt else '?'} s)", flush=True)
         again = second.jobs.SubmitJob(job_pb2.SubmitJobRequest(survey_id=survey_id, configuration="mchs"), timeout=30)
         self.assertEqual(final_state(second, again.id).state, job_pb2.SUCCEEDED, second.server_log())
         self.assertEqual(poses(second, job.id), poses(second, again.id))

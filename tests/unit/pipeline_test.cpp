@@ -466,6 +466,83 @@ TEST(Pipeline, OneAndTwoThreadsGiveTheSameResult) {
   }
 }
 
+// A job stopped in its register stage and run again (docs/service.md, "Jobs that resume"): the
+// second run takes up the batches the first stored, registers the rest, and ends exactly where
+// an uninterrupted run does, every registration's record and every pose the same.
+nlohmann::json without_times(nlohmann::json report) {
+  report.erase("timings_s");
+  report.at("graph").erase("batch_solve_s");
+  for (auto& [key, value] : report.at("graph").items()) {
+    if (key.size() > 2 && key.ends_with("_s")) value = nullptr;
+  }
+  return report;
+}
+
+TEST(Pipeline, AResumedRunTakesUpTheStoredBatchesAndEndsAsTheUninterruptedOne) {
+  const PipelineConfig config = preset_config(Configuration::kMchs);
+  const SubmapSet submaps = build_submaps(small_survey(), config.submaps);
+  std::vector<RegisteredBatch> kept;
+  RegistrationCheckpoints first{{}, [&](const RegisteredBatch& b) { kept.push_back(b); }};
+  const PipelineResult whole = run_pipeline(submaps, 0, config, {}, nullptr, &first);
+  ASSERT_GT(whole.batches, 2);
+  ASSERT_EQ(kept.size(), static_cast<std::size_t>(whole.batches));
+  EXPECT_EQ(whole.batches_taken_up, 0);
+
+  // The first half as the stopped run stored it, through its bytes.
+  RegistrationCheckpoints again;
+  const std::size_t stored = kept.size() / 2;
+  for (std::size_t k = 0; k < stored; ++k) again.stored.push_back(batch_from_checkpoint(checkpoint_bytes(kept[k])));
+  std::vector<RegisteredBatch> registered_again;
+  again.keep = [&](const RegisteredBatch& b) { registered_again.push_back(b); };
+  const PipelineResult resumed = run_pipeline(submaps, 0, config, {}, nullptr, &again);
+  EXPECT_EQ(resumed.batches_taken_up, static_cast<int>(stored));
+  ASSERT_EQ(registered_again.size(), kept.size() - stored);
+  EXPECT_EQ(registered_again.front().begin, kept[stored].begin);
+  ASSERT_EQ(resumed.optimized_poses.size(), whole.optimized_poses.size());
+  for (std::size_t i = 0; i < whole.optimized_poses.size(); ++i) {
+    EXPECT_TRUE(resumed.optimized_poses[i].matrix() == whole.optimized_poses[i].matrix()) << "submap " << i;
+  }
+  EXPECT_EQ(without_times(report_json(resumed)), without_times(report_json(whole)));
+
+  // A batch of other pairs (the survey's submaps cut otherwise, another configuration) is not
+  // taken up: registered again.
+  RegistrationCheckpoints other;
+  other.stored = {kept.front()};
+  other.stored.front().constraints.front().to += 1;
+  EXPECT_EQ(run_pipeline(submaps, 0, config, {}, nullptr, &other).batches_taken_up, 0);
+}
+
+TEST(RegistrationCheckpoint, RefusesBytesThatAreNotABatchOfThisBuild) {
+  RegisteredBatch batch{3, 7, {}};
+  Constraint c;
+  c.type = ConstraintType::kLoop;
+  c.path = RegistrationPath::kDirect;
+  c.horizontal_doubt = "from 1.5 m aside GICP lands 0.80 m away";
+  c.uniqueness.reach = 1;
+  c.uniqueness.competitors = {true, false, true, false, false, false, true, true, false};
+  c.rejection = {RejectionKind::kImplausible, "Mahalanobis2 78.0 > 11.3"};
+  batch.constraints = {c, c};
+  const std::vector<std::uint8_t> bytes = checkpoint_bytes(batch);
+  const RegisteredBatch back = batch_from_checkpoint(bytes);
+  EXPECT_EQ(back.begin, 3);
+  EXPECT_EQ(back.end, 7);
+  ASSERT_EQ(back.constraints.size(), 2u);
+  EXPECT_EQ(back.constraints[1].uniqueness.competitors, c.uniqueness.competitors);
+  EXPECT_EQ(back.constraints[1].horizontal_doubt, c.horizontal_doubt);
+  EXPECT_EQ(back.constraints[1].rejection.text(), c.rejection.text());
+  EXPECT_EQ(checkpoint_bytes(back), bytes);
+
+  std::vector<std::uint8_t> cut(bytes.begin(), bytes.end() - 1), longer = bytes, other_version = bytes;
+  longer.push_back(0);
+  other_version[4] ^= 1;
+  for (const auto& wrong : {cut, longer, other_version, std::vector<std::uint8_t>{}}) {
+    EXPECT_THROW(batch_from_checkpoint(wrong), CheckpointError);
+  }
+  // A mask that does not fit its reach would send competitor_offsets past its end.
+  batch.constraints[0].uniqueness.reach = 2;
+  EXPECT_THROW(batch_from_checkpoint(checkpoint_bytes(batch)), CheckpointError);
+}
+
 TEST(Pipeline, CancellationStopsItDuringRegistration) {
   std::atomic<bool> cancel = false;
   std::vector<std::string> stages;
