@@ -18,7 +18,7 @@ first_pid=$server_pid
 cli="$build/client/bathyslam"
 q() { psql -qAt "$url" -c "$1"; }
 
-survey=$("$cli" upload "$bundle" --name resume | awk '/^survey/ {print $2}')
+survey=$("$cli" upload "$bundle" --name resume 2> /dev/null | awk '/^survey/ {print $2}')
 job=$("$cli" submit "$survey" --config mchs | awk '/^job/ {print $2}')
 echo "survey $survey uploaded; job $job submitted"
 until [ "$(q "SELECT count(*) FROM job_events WHERE job_id = $job AND stage = 'register' AND progress >= $fraction")" != 0 ]; do
@@ -42,14 +42,16 @@ again=$("$cli" submit "$survey" --config mchs | awk '/^job/ {print $2}')
 grep -E "job ($job|$again): (took up|succeeded)" "$work/server.log" | sed 's/^[^ ]* //'
 seconds() { sed -n "s/.*job $1: succeeded in \([0-9.]*\) s.*/\1/p" "$work/server.log"; }
 # Each stage's time in the two finishing attempts, from their progress events (the next stage's
-# first event minus this one's).
-stages="SELECT string_agg(format('%s %s s', stage, round(seconds::numeric, 1)), ', ' ORDER BY first) FROM (
-  SELECT stage, min(at) AS first,
+# first event minus this one's); the store's steps (its events' messages) apart.
+stages="SELECT string_agg(format('%s %s s', step, round(seconds::numeric, 1)), ', ' ORDER BY first) FROM (
+  SELECT step, min(at) AS first,
          extract(epoch FROM coalesce(lead(min(at)) OVER (ORDER BY min(at)), max(max(at)) OVER ()) - min(at)) AS seconds
-  FROM job_events WHERE job_id = JOB AND attempt = (SELECT max(attempt) FROM job_events WHERE job_id = JOB)
-  GROUP BY stage) s"
+  FROM (SELECT CASE WHEN stage = 'store' THEN 'store ' || message ELSE stage END AS step, at FROM job_events
+        WHERE job_id = JOB AND attempt = (SELECT max(attempt) FROM job_events WHERE job_id = JOB)) e
+  GROUP BY step) s"
 echo "takeover:    $(q "${stages//JOB/$job}")"
 echo "undisturbed: $(q "${stages//JOB/$again}")"
+echo "stored points of job $again: $(q "SELECT round(sum(pg_column_size(points)) / 1e6, 1) || ' MB for ' || round(sum(point_count) * 12 / 1e6, 1) || ' MB of float32' FROM submaps WHERE job_id = $again")"
 resumed=$(seconds "$job")
 whole=$(seconds "$again")
 poses="SELECT md5(string_agg(pose::text, ';' ORDER BY submap)) FROM optimized_poses WHERE job_id ="

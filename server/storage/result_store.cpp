@@ -31,19 +31,21 @@ Eigen::Isometry3d parse_pose(std::string_view text) {
   return pose;
 }
 
-// float32 triples; deflated only when that actually saves space (sounding coordinates are
-// noisy, so it often does not save much).
+// float32 triples with their bytes in planes (every float's first byte, then every second ...),
+// which the column compresses (LZ4: migration 0014): the planes of signs, exponents and high
+// mantissas repeat, where the interleaved floats gave LZ4 nothing. Deflating the floats here cost
+// more than storing them ("f32le+zlib", still read).
 std::pair<std::string, Bytes> encode_points(const std::vector<Eigen::Vector3f>& points) {
-  Bytes raw(points.size() * 3 * sizeof(float));
-  for (std::size_t i = 0; i < points.size(); ++i) std::memcpy(raw.data() + i * 12, points[i].data(), 12);
-  uLongf packed_size = compressBound(raw.size());
-  Bytes packed(packed_size);
-  if (compress2(packed.data(), &packed_size, raw.data(), raw.size(), Z_BEST_SPEED) == Z_OK &&
-      packed_size < raw.size() * 9 / 10) {
-    packed.resize(packed_size);
-    return {"f32le+zlib", std::move(packed)};
+  const std::size_t floats = points.size() * 3;
+  Bytes planes(floats * 4);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (int axis = 0; axis < 3; ++axis) {
+      std::uint8_t bytes[4];
+      std::memcpy(bytes, &points[i][axis], 4);
+      for (int k = 0; k < 4; ++k) planes[k * floats + i * 3 + axis] = bytes[k];
+    }
   }
-  return {"f32le", std::move(raw)};
+  return {"f32le-planes", std::move(planes)};
 }
 
 std::vector<Eigen::Vector3f> decode_points(std::string_view encoding, const Bytes& data, std::size_t count) {
@@ -55,6 +57,13 @@ std::vector<Eigen::Vector3f> decode_points(std::string_view encoding, const Byte
       throw std::runtime_error("submap points: corrupt zlib data");
   } else if (encoding == "f32le") {
     raw = data;
+  } else if (encoding == "f32le-planes") {
+    if (data.size() != count * 12) throw std::runtime_error("submap points: size does not match the point count");
+    raw.resize(data.size());
+    const std::size_t floats = count * 3;
+    for (std::size_t f = 0; f < floats; ++f) {
+      for (int k = 0; k < 4; ++k) raw[f * 4 + k] = data[k * floats + f];
+    }
   } else {
     throw std::runtime_error("submap points: unknown encoding '" + std::string(encoding) + "'");
   }

@@ -1,9 +1,11 @@
 // Job results round-trip, and a survey's deletion takes everything under it.
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 
 #include <unistd.h>
+#include <zlib.h>
 
 #include <gtest/gtest.h>
 
@@ -63,8 +65,19 @@ TEST(ResultStore, SubmapsRoundTripEveryField) {
   JobFixture f;
   const std::vector<Submap> saved = {a_submap(0, false), a_submap(1, true), a_submap(2, false)};
   f.results.save_submaps(f.job, saved);
-  // Noise stays raw, the regular grid is deflated: both encodings are exercised.
-  EXPECT_EQ(f.db.scalar("SELECT count(*) FROM submaps WHERE points_encoding = 'f32le+zlib'"), 1);
+  EXPECT_EQ(f.db.scalar("SELECT count(*) FROM submaps WHERE points_encoding = 'f32le-planes'"), 3);
+  // Rows stored before the byte planes (migration 0014) are still read: submap 1 as plain
+  // floats, submap 2 deflated.
+  Bytes floats(saved[1].points.size() * 12), deflated(compressBound(saved[2].points.size() * 12));
+  std::memcpy(floats.data(), saved[1].points.data(), floats.size());
+  uLongf deflated_size = deflated.size();
+  ASSERT_EQ(compress2(deflated.data(), &deflated_size, reinterpret_cast<const Bytef*>(saved[2].points.data()),
+                      saved[2].points.size() * 12, Z_BEST_SPEED), Z_OK);
+  deflated.resize(deflated_size);
+  auto update = f.pool.acquire();
+  update->exec("UPDATE submaps SET points_encoding = 'f32le', points = $2 WHERE job_id = $1 AND idx = 1", {f.job, floats});
+  update->exec("UPDATE submaps SET points_encoding = 'f32le+zlib', points = $2 WHERE job_id = $1 AND idx = 2",
+               {f.job, deflated});
   std::vector<Submap> loaded = f.results.load_submaps(f.job);
   ASSERT_EQ(loaded.size(), saved.size());
   for (std::size_t i = 0; i < saved.size(); ++i) {
