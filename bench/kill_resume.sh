@@ -52,6 +52,7 @@ stages="SELECT string_agg(format('%s %s s', step, round(seconds::numeric, 1)), '
 echo "takeover:    $(q "${stages//JOB/$job}")"
 echo "undisturbed: $(q "${stages//JOB/$again}")"
 echo "stored points of job $again: $(q "SELECT round(sum(pg_column_size(points)) / 1e6, 1) || ' MB for ' || round(sum(point_count) * 12 / 1e6, 1) || ' MB of float32' FROM submaps WHERE job_id = $again")"
+echo "stored corrected GSF of job $again: $(q "SELECT round(sum(pg_column_size(data)) / 1e6, 1) || ' MB for ' || round(sum(length(data)) / 1e6, 1) || ' MB' FROM job_file_chunks WHERE job_id = $again AND name LIKE '%.gsf'")"
 resumed=$(seconds "$job")
 whole=$(seconds "$again")
 poses="SELECT md5(string_agg(pose::text, ';' ORDER BY submap)) FROM optimized_poses WHERE job_id ="
