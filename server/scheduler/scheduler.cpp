@@ -246,14 +246,22 @@ RegistrationCheckpoints Scheduler::checkpoints(const storage::Lease& lease, cons
       log("job %lld: a stored checkpoint is not read (%s); its batch is registered again", id, error.what());
     }
   }
-  auto writes = std::make_shared<FailureStreak>(name + ": storing a checkpoint");
+  // After a failed write the next ones wait 10 s: a database that does not answer would otherwise
+  // hold the registrations up to its connect timeout every batch.
+  struct Writes {
+    FailureStreak streak;
+    Clock::time_point next_try{};
+  };
+  auto writes = std::make_shared<Writes>(Writes{FailureStreak(name + ": storing a checkpoint")});
   checkpoints.keep = [this, lease, writes](const RegisteredBatch& batch) {
+    if (Clock::now() < writes->next_try) return;
     try {
       results_.fenced(lease).save_checkpoint(lease.job_id, batch.begin, batch.end, checkpoint_bytes(batch));
-      writes->succeeded();
+      writes->streak.succeeded();
     } catch (const storage::DatabaseError& error) {
       if (!error.transient()) throw;
-      writes->failed(error.what());
+      writes->streak.failed(error.what());
+      writes->next_try = Clock::now() + std::chrono::seconds(10);
     }
   };
   return checkpoints;
