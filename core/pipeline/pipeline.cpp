@@ -168,19 +168,19 @@ class NavigationNoiseTracker {
 };
 
 // The batch [begin, end) as an earlier run of the job registered it, when it registered these
-// very candidates (the same pairs in the same order: the run before was this run, up to here);
-// nullptr otherwise.
+// very candidates from these very guesses (the same pairs in the same order, each guess equal to
+// the last bit: the run before was this run, up to here); nullptr otherwise.
 const RegisteredBatch* taken_up(const RegistrationCheckpoints* checkpoints, int begin, int end,
-                                const std::vector<Candidate>& candidates) {
+                                const std::vector<Candidate>& candidates, const std::vector<Eigen::Isometry3d>& estimate) {
   if (!checkpoints) return nullptr;
+  const auto same = [&](const Constraint& c, const Candidate& candidate) {
+    const CandidatePair& pair = candidate.pair;
+    return c.type == candidate.type && c.from == pair.target && c.to == pair.source &&
+           c.guess.matrix() == (estimate[pair.target].inverse() * estimate[pair.source]).matrix();
+  };
   for (const RegisteredBatch& stored : checkpoints->stored) {
     if (stored.begin != begin || stored.end != end || stored.constraints.size() != candidates.size()) continue;
-    bool same = true;
-    for (std::size_t k = 0; k < candidates.size() && same; ++k) {
-      const Constraint& c = stored.constraints[k];
-      same = c.type == candidates[k].type && c.from == candidates[k].pair.target && c.to == candidates[k].pair.source;
-    }
-    if (same) return &stored;
+    if (std::equal(stored.constraints.begin(), stored.constraints.end(), candidates.begin(), same)) return &stored;
   }
   return nullptr;
 }
@@ -212,7 +212,8 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
     }
     const std::vector<Candidate> candidates = candidates_ending_in(submaps, estimate, begin, end, config.candidates, plan);
     ++r.batches;
-    if (const RegisteredBatch* stored = taken_up(checkpoints, begin, end, candidates)) {
+    throw_if_cancelled(cancel);  // a batch taken up registers nothing, where the cancel is seen
+    if (const RegisteredBatch* stored = taken_up(checkpoints, begin, end, candidates, estimate)) {
       r.constraints.insert(r.constraints.end(), stored->constraints.begin(), stored->constraints.end());
       ++r.batches_taken_up;
     } else {

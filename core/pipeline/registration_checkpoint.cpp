@@ -9,6 +9,13 @@ namespace {
 
 // Raised whenever a field of Constraint (or of what it holds) is added, removed or reordered.
 constexpr std::uint32_t kVersion = 1;
+// A tripwire for that: a field added to Constraint changes its size (GCC 12 and Clang 14 on
+// Debian 12 alike). Write and read the new field below, raise kVersion, then this size.
+static_assert(sizeof(Constraint) == 1392 && sizeof(Uniqueness) == 192 && sizeof(RegistrationQuality) == 32,
+              "Constraint changed: keep registration_checkpoint.cpp's writer and reader in step");
+// The probe's square is (2 reach + 1)² offsets (uniqueness.h): far beyond any search radius over
+// step, and small enough that its side cannot overflow.
+constexpr int kMaxReach = 1 << 15;
 constexpr char kMagic[4] = {'B', 'S', 'R', 'B'};
 
 class Writer {
@@ -139,9 +146,10 @@ Uniqueness get_uniqueness(Reader& r) {
   u.competitors = r.get_bits();
   u.open_competitors = r.get_bits();
   // competitor_offsets() walks the masks as a square of (2 reach + 1)² offsets.
-  const auto side = 2 * static_cast<std::size_t>(std::max(0, u.reach)) + 1;
+  if (u.reach < 0 || u.reach > kMaxReach) throw CheckpointError("checkpoint: a uniqueness probe's reach out of range");
+  const auto side = 2 * static_cast<std::size_t>(u.reach) + 1;
   for (const std::vector<bool>* mask : {&u.competitors, &u.open_competitors}) {
-    if (u.reach < 0 || (!mask->empty() && mask->size() != side * side))
+    if (!mask->empty() && mask->size() != side * side)
       throw CheckpointError("checkpoint: a uniqueness mask does not match its reach");
   }
   return u;

@@ -230,9 +230,9 @@ void Scheduler::store(const storage::ClaimedJob& job, const PipelineResult& resu
 }
 
 // Jobs that resume (docs/service.md): the batches an earlier attempt stored are taken up where
-// they are still this run's (the pipeline checks each against its candidates); bytes this build
-// cannot read are registered again. Each batch registered is stored under the lease as it comes:
-// a lost lease stops the job there, a database away costs only that checkpoint.
+// they are still this run's (the pipeline checks each against its candidates and their guesses);
+// bytes this build cannot read are registered again. Each batch registered is stored under the
+// lease as it comes: a lost lease stops the job there, a failed write costs only that checkpoint.
 RegistrationCheckpoints Scheduler::checkpoints(const storage::Lease& lease, const std::atomic<bool>& cancel) {
   const long long id = lease.job_id;
   const std::string name = "job " + std::to_string(id);
@@ -258,8 +258,7 @@ RegistrationCheckpoints Scheduler::checkpoints(const storage::Lease& lease, cons
     try {
       results_.fenced(lease).save_checkpoint(lease.job_id, batch.begin, batch.end, checkpoint_bytes(batch));
       writes->streak.succeeded();
-    } catch (const storage::DatabaseError& error) {
-      if (!error.transient()) throw;
+    } catch (const storage::DatabaseError& error) {  // a checkpoint is a cache: the job goes on
       writes->streak.failed(error.what());
       writes->next_try = Clock::now() + std::chrono::seconds(10);
     }

@@ -178,12 +178,19 @@ bool JobQueue::succeed(const Lease& lease) { return finish(lease, JobState::kSuc
 
 bool JobQueue::fail(const Lease& lease, const std::string& error) { return finish(lease, JobState::kFailed, error); }
 
+// An ended job's registration checkpoints go with it: no attempt will take them up (a kill
+// during the store stage leaves them for the next attempt until then).
 bool JobQueue::finish(const Lease& lease, JobState state, const std::optional<std::string>& error) {
   auto connection = pool_.acquire();
-  return connection
-             ->exec(with_lease("UPDATE jobs SET state = $4, error = $5, finished_at = now(), lease_expires_at = NULL"),
-                    {lease.job_id, lease.worker, lease.attempt, to_string(state), error})
-             .affected() == 1;
+  Transaction transaction(*connection);
+  const bool ended =
+      connection
+          ->exec(with_lease("UPDATE jobs SET state = $4, error = $5, finished_at = now(), lease_expires_at = NULL"),
+                 {lease.job_id, lease.worker, lease.attempt, to_string(state), error})
+          .affected() == 1;
+  if (ended) connection->exec("DELETE FROM job_checkpoints WHERE job_id = $1", {lease.job_id});
+  transaction.commit();
+  return ended;
 }
 
 bool JobQueue::cancel(std::int64_t job_id) {

@@ -449,12 +449,13 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
 
 namespace {
 
-// Everything a job stored, inside the caller's transaction.
-void delete_results(Connection& connection, std::int64_t job_id) {
+// Everything a job stored, inside the caller's transaction; its registration checkpoints only
+// with `checkpoints` (an attempt that stores its results again keeps them until the job ends).
+void delete_results(Connection& connection, std::int64_t job_id, bool checkpoints) {
   // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
-  for (const char* table :
-       {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps", "job_checkpoints"})
+  for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
     connection.exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
+  if (checkpoints) connection.exec("DELETE FROM job_checkpoints WHERE job_id = $1", {job_id});
   connection.exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
 }
 
@@ -464,7 +465,7 @@ void ResultStore::discard(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   check_fence(*connection, job_id);
-  delete_results(*connection, job_id);
+  delete_results(*connection, job_id, false);
   transaction.commit();
 }
 
@@ -475,7 +476,7 @@ bool ResultStore::discard_if_cancelled(std::int64_t job_id) {
   // waits for that step to commit, so that no row of it lands after the removal.
   const Result job = connection->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {job_id});
   if (job.rows() == 0 || parse_job_state(job.text(0, "state")) != JobState::kCancelled) return false;
-  delete_results(*connection, job_id);
+  delete_results(*connection, job_id, true);
   transaction.commit();
   return true;
 }

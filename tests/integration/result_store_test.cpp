@@ -271,7 +271,8 @@ TEST(ResultStore, AnAttemptStoppedWhileStoringLeavesNothingTheNextOneCollidesWit
 }
 
 // Jobs that resume: a running attempt stores each registered batch under its lease; the next
-// attempt reads them back by batch start; the store's discard (its first step) and a cancel remove them.
+// attempt reads them back by batch start. The store's discard (its first step) keeps them, for an
+// attempt killed while it stores; the job's end removes them (a cancel: OnlyACancelledJobs...).
 TEST(ResultStore, CheckpointsAreKeptUnderTheLeaseForTheNextAttempt) {
   JobFixture f;
   f.pool.acquire()->exec("UPDATE jobs SET max_attempts = 2");
@@ -291,9 +292,11 @@ TEST(ResultStore, CheckpointsAreKeptUnderTheLeaseForTheNextAttempt) {
   EXPECT_EQ(f.results.load_checkpoints(f.job).size(), 2u);  // what the next attempt takes up
   ResultStore next = f.results.fenced(second->lease);
   next.save_checkpoint(f.job, 24, 36, {3});
-  next.discard(f.job);
-  EXPECT_TRUE(f.results.load_checkpoints(f.job).empty());
   EXPECT_THROW(next.save_checkpoint(f.job, 5, 5, {1}), DatabaseError);  // an empty batch
+  next.discard(f.job);
+  EXPECT_EQ(f.results.load_checkpoints(f.job).size(), 3u);
+  ASSERT_TRUE(f.jobs.succeed(second->lease));
+  EXPECT_TRUE(f.results.load_checkpoints(f.job).empty());
 }
 
 // A worker whose lease was reaped while it stored must neither add to nor discard the results

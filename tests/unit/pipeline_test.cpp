@@ -504,11 +504,12 @@ TEST(Pipeline, AResumedRunTakesUpTheStoredBatchesAndEndsAsTheUninterruptedOne) {
   }
   EXPECT_EQ(without_times(report_json(resumed)), without_times(report_json(whole)));
 
-  // A batch of other pairs (the survey's submaps cut otherwise, another configuration) is not
-  // taken up: registered again.
+  // A batch of other pairs (the survey's submaps cut otherwise, another configuration), or of
+  // the same pairs from other guesses (another solver's estimate), is not taken up: registered again.
   RegistrationCheckpoints other;
-  other.stored = {kept.front()};
-  other.stored.front().constraints.front().to += 1;
+  other.stored = {kept.front(), kept[1]};
+  other.stored[0].constraints.front().to += 1;
+  other.stored[1].constraints.back().guess.translation().x() += 1e-9;
   EXPECT_EQ(run_pipeline(submaps, 0, config, {}, nullptr, &other).batches_taken_up, 0);
 }
 
@@ -538,8 +539,12 @@ TEST(RegistrationCheckpoint, RefusesBytesThatAreNotABatchOfThisBuild) {
   for (const auto& wrong : {cut, longer, other_version, std::vector<std::uint8_t>{}}) {
     EXPECT_THROW(batch_from_checkpoint(wrong), CheckpointError);
   }
-  // A mask that does not fit its reach would send competitor_offsets past its end.
+  // A mask that does not fit its reach would send competitor_offsets past its end; a reach whose
+  // square's side overflows an int, even without a mask.
   batch.constraints[0].uniqueness.reach = 2;
+  EXPECT_THROW(batch_from_checkpoint(checkpoint_bytes(batch)), CheckpointError);
+  batch.constraints[0].uniqueness = {};
+  batch.constraints[0].uniqueness.reach = 1 << 30;
   EXPECT_THROW(batch_from_checkpoint(checkpoint_bytes(batch)), CheckpointError);
 }
 
