@@ -80,3 +80,5 @@ echo "  PostgreSQL COPY   $(rate "$(median "${pg_s[@]}")") (text, bytea in hex)"
 echo "  PostgreSQL COPY   $(rate "$(median "${pg_binary_s[@]}")") (binary)"
 echo "  bathyslam upload  $(rate "$(median "${upload_s[@]}")" "$total") (the bundle, $total bytes, CreateSurvey to the last file stored)"
 echo "  end to end        $(rate "$(median "${end_s[@]}")" "$total") (the CLI's wall time: hashing, upload, FinalizeSurvey)"
+# The server's peak resident memory over the whole run (issue 35 asks under 300 MB during an upload).
+echo "  server peak RSS   $(awk '/VmHWM/ {printf "%.0f MB", $2 / 1024}' "/proc/$server_pid/status")"
