@@ -179,8 +179,9 @@ const RegisteredBatch* taken_up(const RegistrationCheckpoints* checkpoints, int 
            c.guess.matrix() == (estimate[pair.target].inverse() * estimate[pair.source]).matrix();
   };
   for (const RegisteredBatch& stored : checkpoints->stored) {
-    if (stored.begin != begin || stored.end != end || stored.constraints.size() != candidates.size()) continue;
-    if (std::equal(stored.constraints.begin(), stored.constraints.end(), candidates.begin(), same)) return &stored;
+    if (stored.begin == begin && stored.end == end &&
+        std::equal(stored.constraints.begin(), stored.constraints.end(), candidates.begin(), candidates.end(), same))
+      return &stored;
   }
   return nullptr;
 }

@@ -1,7 +1,6 @@
 #include "core/pipeline/registration_checkpoint.h"
 
 #include <cstring>
-#include <limits>
 #include <type_traits>
 
 namespace bathyslam {

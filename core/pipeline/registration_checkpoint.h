@@ -5,8 +5,8 @@
 //
 // A batch is stored as register_pairs gave it, before the later batches' judgements (the DR
 // gate under a newer noise estimate, PCM) changed anything: those are replayed from it, so a
-// resumed run repeats the uninterrupted one exactly. The bytes are this build's own (a version
-// number first); they are a cache, not an exchange format.
+// resumed run repeats the uninterrupted one exactly. The bytes carry a layout version, not a
+// build's identity; they are a cache, not an exchange format.
 #include <cstdint>
 #include <functional>
 #include <stdexcept>
@@ -23,7 +23,7 @@ struct RegisteredBatch {
   std::vector<Constraint> constraints;
 };
 
-// Bytes that are not a batch of this build: the caller registers the batch again.
+// Bytes that are not a batch in this layout: the caller registers the batch again.
 class CheckpointError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -248,19 +248,15 @@ RegistrationCheckpoints Scheduler::checkpoints(const storage::Lease& lease, cons
   }
   // After a failed write the next ones wait 10 s: a database that does not answer would otherwise
   // hold the registrations up to its connect timeout every batch.
-  struct Writes {
-    FailureStreak streak;
-    Clock::time_point next_try{};
-  };
-  auto writes = std::make_shared<Writes>(Writes{FailureStreak(name + ": storing a checkpoint")});
-  checkpoints.keep = [this, lease, writes](const RegisteredBatch& batch) {
-    if (Clock::now() < writes->next_try) return;
+  checkpoints.keep = [this, lease, streak = FailureStreak(name + ": storing a checkpoint"),
+                      next_try = Clock::time_point{}](const RegisteredBatch& batch) mutable {
+    if (Clock::now() < next_try) return;
     try {
       results_.fenced(lease).save_checkpoint(lease.job_id, batch.begin, batch.end, checkpoint_bytes(batch));
-      writes->streak.succeeded();
+      streak.succeeded();
     } catch (const storage::DatabaseError& error) {  // a checkpoint is a cache: the job goes on
-      writes->streak.failed(error.what());
-      writes->next_try = Clock::now() + std::chrono::seconds(10);
+      streak.failed(error.what());
+      next_try = Clock::now() + std::chrono::seconds(10);
     }
   };
   return checkpoints;

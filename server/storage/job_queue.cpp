@@ -178,28 +178,34 @@ bool JobQueue::succeed(const Lease& lease) { return finish(lease, JobState::kSuc
 
 bool JobQueue::fail(const Lease& lease, const std::string& error) { return finish(lease, JobState::kFailed, error); }
 
-// An ended job's registration checkpoints go with it: no attempt will take them up (a kill
-// during the store stage leaves them for the next attempt until then).
-bool JobQueue::finish(const Lease& lease, JobState state, const std::optional<std::string>& error) {
-  auto connection = pool_.acquire();
-  Transaction transaction(*connection);
-  const bool ended =
-      connection
-          ->exec(with_lease("UPDATE jobs SET state = $4, error = $5, finished_at = now(), lease_expires_at = NULL"),
-                 {lease.job_id, lease.worker, lease.attempt, to_string(state), error})
-          .affected() == 1;
-  if (ended) connection->exec("DELETE FROM job_checkpoints WHERE job_id = $1", {lease.job_id});
+namespace {
+
+// `update` (one job's row) and, when it ended the job, the job's registration checkpoints, in
+// one transaction: no attempt will take them up (a kill during the store stage leaves them for
+// the next attempt until then). Whether the job ended.
+bool end_job(Connection& connection, std::string_view update, std::initializer_list<Param> params, std::int64_t job_id) {
+  Transaction transaction(connection);
+  const bool ended = connection.exec(update, params).affected() == 1;
+  if (ended) connection.exec("DELETE FROM job_checkpoints WHERE job_id = $1", {job_id});
   transaction.commit();
   return ended;
 }
 
+}  // namespace
+
+bool JobQueue::finish(const Lease& lease, JobState state, const std::optional<std::string>& error) {
+  auto connection = pool_.acquire();
+  return end_job(*connection,
+                 with_lease("UPDATE jobs SET state = $4, error = $5, finished_at = now(), lease_expires_at = NULL"),
+                 {lease.job_id, lease.worker, lease.attempt, to_string(state), error}, lease.job_id);
+}
+
 bool JobQueue::cancel(std::int64_t job_id) {
   auto connection = pool_.acquire();
-  return connection
-             ->exec("UPDATE jobs SET state = 'cancelled', finished_at = now(), lease_expires_at = NULL"
-                    " WHERE id = $1 AND state IN ('queued', 'running')",
-                    {job_id})
-             .affected() == 1;
+  return end_job(*connection,
+                 "UPDATE jobs SET state = 'cancelled', finished_at = now(), lease_expires_at = NULL"
+                 " WHERE id = $1 AND state IN ('queued', 'running')",
+                 {job_id}, job_id);
 }
 
 namespace {

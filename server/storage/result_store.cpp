@@ -250,14 +250,10 @@ void ResultStore::put_tile(std::int64_t job_id, const TileKey& key, const Bytes&
   if (key.format != "geotiff" && key.format != "openvdb" && key.format != "png" && key.format != "cog" && key.format != "bag")
     throw std::invalid_argument("tile format '" + key.format + "': geotiff, openvdb, png, cog or bag");
   if (key.level < 0) throw std::invalid_argument("tile level must be non-negative");
-  auto connection = pool_.acquire();
-  Transaction transaction(*connection);
-  check_fence(*connection, job_id);
-  connection->exec(
-      "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data) VALUES ($1, $2, $3, $4, $5, $6)"
-      " ON CONFLICT (job_id, format, level, tile_col, tile_row) DO UPDATE SET data = EXCLUDED.data",
-      {job_id, key.format, key.level, key.col, key.row, data});
-  transaction.commit();
+  write_fenced(job_id,
+               "INSERT INTO tiles (job_id, format, level, tile_col, tile_row, data) VALUES ($1, $2, $3, $4, $5, $6)"
+               " ON CONFLICT (job_id, format, level, tile_col, tile_row) DO UPDATE SET data = EXCLUDED.data",
+               {job_id, key.format, key.level, key.col, key.row, data});
 }
 
 std::optional<Bytes> ResultStore::tile(std::int64_t job_id, const TileKey& key) {
@@ -383,15 +379,11 @@ Bytes ResultStore::file_bytes(std::int64_t job_id, const std::string& name, std:
 }
 
 void ResultStore::save_map_grid(std::int64_t job_id, const MapGrid& g) {
-  auto connection = pool_.acquire();
-  Transaction transaction(*connection);
-  check_fence(*connection, job_id);
-  connection->exec(
-      "INSERT INTO maps (job_id, epsg, resolution_m, min_easting, min_northing, max_easting, max_northing,"
-      " tile_size_cells, levels) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
-      {job_id, g.epsg, g.resolution_m, g.min_easting, g.min_northing, g.max_easting, g.max_northing, g.tile_size_cells,
-       g.levels});
-  transaction.commit();
+  write_fenced(job_id,
+               "INSERT INTO maps (job_id, epsg, resolution_m, min_easting, min_northing, max_easting, max_northing,"
+               " tile_size_cells, levels) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
+               {job_id, g.epsg, g.resolution_m, g.min_easting, g.min_northing, g.max_easting, g.max_northing,
+                g.tile_size_cells, g.levels});
 }
 
 std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
@@ -414,12 +406,8 @@ std::optional<MapGrid> ResultStore::map_grid(std::int64_t job_id) {
 }
 
 void ResultStore::save_origin(std::int64_t job_id, const LocalOrigin& origin) {
-  auto connection = pool_.acquire();
-  Transaction transaction(*connection);
-  check_fence(*connection, job_id);
-  connection->exec("UPDATE jobs SET origin_easting = $2, origin_northing = $3 WHERE id = $1",
-                   {job_id, origin.easting, origin.northing});
-  transaction.commit();
+  write_fenced(job_id, "UPDATE jobs SET origin_easting = $2, origin_northing = $3 WHERE id = $1",
+               {job_id, origin.easting, origin.northing});
 }
 
 ResultStore ResultStore::fenced(const Lease& lease) const {
@@ -436,6 +424,14 @@ void ResultStore::check_fence(Connection& connection, std::int64_t job_id) const
   if (!hold_lease(connection, *fence_)) throw LeaseLost(*fence_);
 }
 
+void ResultStore::write_fenced(std::int64_t job_id, std::string_view sql, std::initializer_list<Param> params) {
+  auto connection = pool_.acquire();
+  Transaction transaction(*connection);
+  check_fence(*connection, job_id);
+  connection->exec(sql, params);
+  transaction.commit();
+}
+
 std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Result row = connection->exec(
@@ -449,13 +445,12 @@ std::optional<LocalOrigin> ResultStore::origin(std::int64_t job_id) {
 
 namespace {
 
-// Everything a job stored, inside the caller's transaction; its registration checkpoints only
-// with `checkpoints` (an attempt that stores its results again keeps them until the job ends).
-void delete_results(Connection& connection, std::int64_t job_id, bool checkpoints) {
+// Everything a job stored, inside the caller's transaction, but its registration checkpoints
+// (an attempt that stores its results again keeps them; JobQueue removes them when the job ends).
+void delete_results(Connection& connection, std::int64_t job_id) {
   // report_plots go with their report, job_file_chunks with their file (ON DELETE CASCADE).
   for (const char* table : {"reports", "maps", "tiles", "job_files", "optimized_poses", "constraints", "submaps"})
     connection.exec(std::string("DELETE FROM ") + table + " WHERE job_id = $1", {job_id});
-  if (checkpoints) connection.exec("DELETE FROM job_checkpoints WHERE job_id = $1", {job_id});
   connection.exec("UPDATE jobs SET origin_easting = NULL, origin_northing = NULL WHERE id = $1", {job_id});
 }
 
@@ -465,7 +460,7 @@ void ResultStore::discard(std::int64_t job_id) {
   auto connection = pool_.acquire();
   Transaction transaction(*connection);
   check_fence(*connection, job_id);
-  delete_results(*connection, job_id, false);
+  delete_results(*connection, job_id);
   transaction.commit();
 }
 
@@ -476,7 +471,7 @@ bool ResultStore::discard_if_cancelled(std::int64_t job_id) {
   // waits for that step to commit, so that no row of it lands after the removal.
   const Result job = connection->exec("SELECT state FROM jobs WHERE id = $1 FOR UPDATE", {job_id});
   if (job.rows() == 0 || parse_job_state(job.text(0, "state")) != JobState::kCancelled) return false;
-  delete_results(*connection, job_id, true);
+  delete_results(*connection, job_id);
   transaction.commit();
   return true;
 }
@@ -503,14 +498,10 @@ std::optional<Report> ResultStore::load_report(std::int64_t job_id) {
 }
 
 void ResultStore::save_checkpoint(std::int64_t job_id, int batch_begin, int batch_end, const Bytes& bytes) {
-  auto connection = pool_.acquire();
-  Transaction transaction(*connection);
-  check_fence(*connection, job_id);
-  connection->exec(
-      "INSERT INTO job_checkpoints (job_id, batch_begin, batch_end, data) VALUES ($1, $2, $3, $4)"
-      " ON CONFLICT (job_id, batch_begin) DO UPDATE SET batch_end = EXCLUDED.batch_end, data = EXCLUDED.data",
-      {job_id, batch_begin, batch_end, bytes});
-  transaction.commit();
+  write_fenced(job_id,
+               "INSERT INTO job_checkpoints (job_id, batch_begin, batch_end, data) VALUES ($1, $2, $3, $4)"
+               " ON CONFLICT (job_id, batch_begin) DO UPDATE SET batch_end = EXCLUDED.batch_end, data = EXCLUDED.data",
+               {job_id, batch_begin, batch_end, bytes});
 }
 
 std::vector<Bytes> ResultStore::load_checkpoints(std::int64_t job_id) {

@@ -102,7 +102,8 @@ class ResultStore {
 
   // The register stage's batches as a running job registers them (core/pipeline/
   // registration_checkpoint.h), for its next attempt to take up: `bytes` replaces a batch of the
-  // same start. Removed with the job's other results (discard).
+  // same start. Kept by discard (an attempt killed while it stores leaves them to the next);
+  // removed when the job ends (JobQueue: finish, cancel).
   void save_checkpoint(std::int64_t job_id, int batch_begin, int batch_end, const Bytes& bytes);
   std::vector<Bytes> load_checkpoints(std::int64_t job_id);  // by batch start
 
@@ -117,6 +118,8 @@ class ResultStore {
  private:
   // Inside a write's transaction: throws LeaseLost unless the fence's lease is held.
   void check_fence(Connection& connection, std::int64_t job_id) const;
+  // One statement in a transaction of its own, behind the fence.
+  void write_fenced(std::int64_t job_id, std::string_view sql, std::initializer_list<Param> params);
 
   ConnectionPool& pool_;
   std::size_t chunk_bytes_;
