@@ -17,7 +17,8 @@ cd "$(dirname "$0")/.."
 root=$PWD
 dir=${SANITIZE_BUILD_DIR:-build-sanitize}
 core_programs=(types_test bundle_test lines_test fuse_test register_test search_test candidates_test backend_test
-               metrics_test parameters_test sounding_footprint_test features_test gicp_solver_test)
+               metrics_test parameters_test sounding_footprint_test features_test gicp_solver_test
+               ping_handoff_test)
 programs=("${core_programs[@]}" storage_test)
 cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release -DBATHYSLAM_SANITIZE=ON -DBATHYSLAM_BENCHMARKS=OFF > /dev/null
 cmake --build "$dir" -j"${JOBS:-$(nproc)}" --target "${programs[@]}"

@@ -6,6 +6,7 @@
 
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
+#include "core/pipeline/ping_handoff.h"
 #include "core/pipeline/streamed_survey.h"
 #include "core/submaps/joined_surveys.h"
 
@@ -15,7 +16,13 @@ JobInput read_job_input(const SurveyReader& read, const PipelineConfig& config, 
   const auto start = std::chrono::steady_clock::now();
   PipelineInputs inputs(config.submaps);
   JobInput job;
-  job.survey = read(inputs);
+  if (plan_of(config).threads > 1) {
+    PingHandoff handoff(inputs);
+    job.survey = read(handoff);
+    handoff.finish();
+  } else {
+    job.survey = read(inputs);
+  }
   const PingOutlines& outlines = inputs.outlines();
   if (fuse.resolution_m == 0) fuse.resolution_m = auto_map_resolution(outlines.swept_area(job.survey.nav), fuse.min_soundings);
   if (fuse.max_cells > 0) {
