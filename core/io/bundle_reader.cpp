@@ -4,6 +4,7 @@
 #include <memory>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <limits>
 #include <string>
 
@@ -316,39 +317,50 @@ BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& si
   } catch (const std::exception& e) {
     problems.error("", 0, "", e.what());  // the bundle itself; the message names it
   }
-  auto open = [&](std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
+  auto open_into = [&](ProblemList& said, std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
     if (!files) return nullptr;
     if (!files->contains(file)) {
-      if (required) problems.error(std::string(file), 0, "", "missing from " + files->name());
+      if (required) said.error(std::string(file), 0, "", "missing from " + files->name());
       return nullptr;
     }
     try {
       return files->open(file);
     } catch (const std::exception& e) {
-      problems.error(std::string(file), 0, "", e.what());
+      said.error(std::string(file), 0, "", e.what());
       return nullptr;
     }
   };
+  auto open = [&](std::string_view file, bool required) { return open_into(problems, file, required); };
 
   if (auto json = open(kSurveyJsonFile, true)) {
     survey.metadata = parse_survey_json(read_at_most(*json, kSurveyJsonLimits.max_bytes), kSurveyJsonFile, problems);
   }
   // A line too long ends the reading of its file with a problem at that line.
-  auto guarded = [&](std::string_view file, const std::function<void()>& parse) {
+  auto guarded_into = [&](ProblemList& said, std::string_view file, const std::function<void()>& parse) {
     try {
       parse();
     } catch (const LineTooLong& e) {
-      problems.error(std::string(file), e.line(), "", e.what());
+      said.error(std::string(file), e.line(), "", e.what());
     }
   };
+  auto guarded = [&](std::string_view file, const std::function<void()>& parse) { guarded_into(problems, file, parse); };
+  // The reference navigation is read on a thread of its own beside the navigation: a deep-water
+  // survey logs each at 20 Hz for a day, more text than its soundings (docs/any-depth.md). Its
+  // problems follow the navigation's, as when read after it.
+  ProblemList reference_problems;
+  std::future<void> reading_reference = std::async(std::launch::async, [&] {
+    if (auto reference = open_into(reference_problems, kReferenceNavFile, false)) {
+      guarded_into(reference_problems, kReferenceNavFile,
+                   [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, reference_problems); });
+    }
+  });
   std::optional<TimeSpan> nav_span;
   if (auto nav = open(kNavFile, true)) {
     guarded(kNavFile, [&] { survey.nav = parse_nav_csv(*nav, kNavFile, problems); });
     if (survey.nav.size() >= 2) nav_span = TimeSpan{survey.nav.front().time, survey.nav.back().time};
   }
-  if (auto reference = open(kReferenceNavFile, false)) {
-    guarded(kReferenceNavFile, [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, problems); });
-  }
+  reading_reference.get();
+  problems.append(std::move(reference_problems));
   if (auto pings = open(kPingsFile, true)) {
     sink.begin(survey);
     guarded(kPingsFile, [&] { stream_pings_csv(*pings, kPingsFile, nav_span, problems, sink); });

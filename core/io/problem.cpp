@@ -41,6 +41,19 @@ void ProblemList::add(Problem problem) {
   }
 }
 
+void ProblemList::append(ProblemList later) {
+  errors_ += later.errors_;
+  for (Problem& problem : later.problems_) add(std::move(problem));
+  for (const auto& [file, count] : later.dropped_) {
+    auto it = std::find_if(dropped_.begin(), dropped_.end(), [&](const auto& d) { return d.first == file; });
+    if (it == dropped_.end()) {
+      dropped_.emplace_back(file, count);
+    } else {
+      it->second += count;
+    }
+  }
+}
+
 std::vector<Problem> ProblemList::take() {
   std::vector<Problem> out = std::move(problems_);
   for (const auto& [file, count] : dropped_) {

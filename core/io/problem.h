@@ -32,6 +32,8 @@ class ProblemList {
   std::size_t error_count() const { return errors_; }
   // The kept problems, followed by one note per file whose problems were cut.
   std::vector<Problem> take();
+  // `later`'s problems after these, as if reported here (a file read on another thread).
+  void append(ProblemList later);
 
  private:
   void add(Problem problem);

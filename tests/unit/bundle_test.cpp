@@ -419,6 +419,25 @@ TEST_F(BundleTest, ProblemsAreCappedPerFileWithACount) {
   EXPECT_EQ(result.problems.back().to_string(), "pings.csv: 150 more problems not listed");
 }
 
+// The two navigations are read on two threads; their problems still come in file order (nav.csv's,
+// reference_nav.csv's, pings.csv's), each file capped with its own count.
+TEST_F(BundleTest, ProblemsOfBothNavigationsComeInFileOrderEachCapped) {
+  for (std::string_view file : {kNavFile, kReferenceNavFile}) {
+    auto lines = lines_of(file);
+    for (int i = 0; i < 60; ++i) lines.push_back("1720000009,x,4630000.5,1.25,0.5,-0.25,89.875");
+    write_lines(file, lines);
+  }
+  replace_line(kPingsFile, 2, "1720000000.1,0,0,0,north");
+  const BundleReadResult result = read_bundle(dir_);
+  EXPECT_FALSE(result.survey);
+  ASSERT_EQ(result.problems.size(), 50u + 50u + 1u + 2u);
+  for (std::size_t i = 0; i < 50; ++i) EXPECT_EQ(result.problems[i].file, kNavFile) << i;
+  for (std::size_t i = 50; i < 100; ++i) EXPECT_EQ(result.problems[i].file, kReferenceNavFile) << i;
+  EXPECT_EQ(result.problems[100].file, kPingsFile);
+  EXPECT_EQ(result.problems[101].to_string(), "nav.csv: 10 more problems not listed");
+  EXPECT_EQ(result.problems[102].to_string(), "reference_nav.csv: 10 more problems not listed");
+}
+
 TEST_F(BundleTest, LoadBundleThrowsWithEveryError) {
   replace_line(kNavFile, 3, "1720000000.5,nan,4630000.5,1.25,0.5,-0.25,89.875");
   replace_line(kPingsFile, 5, "1720000000.8,0,0,-inf,9.876");
