@@ -44,12 +44,12 @@ void ProblemList::add(Problem problem) {
 void ProblemList::append(ProblemList later) {
   errors_ += later.errors_;
   for (Problem& problem : later.problems_) add(std::move(problem));
-  for (const auto& [file, count] : later.dropped_) {
-    auto it = std::find_if(dropped_.begin(), dropped_.end(), [&](const auto& d) { return d.first == file; });
+  for (const std::pair<std::string, std::size_t>& cut : later.dropped_) {
+    auto it = std::find_if(dropped_.begin(), dropped_.end(), [&](const auto& d) { return d.first == cut.first; });
     if (it == dropped_.end()) {
-      dropped_.emplace_back(file, count);
+      dropped_.push_back(cut);
     } else {
-      it->second += count;
+      it->second += cut.second;
     }
   }
 }

@@ -234,6 +234,8 @@ int requeue_or_fail(Connection& connection, std::string_view where, std::string_
           "  INSERT INTO job_events (job_id, attempt, stage, progress, message)"
           "  SELECT id, attempts, '" + std::string(stage) + "', 0, format('%s; %s', " + said +
           ", CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM changed"
+          "), dropped AS ("  // a job that failed for good leaves no checkpoints, as end_job
+          "  DELETE FROM job_checkpoints WHERE job_id IN (SELECT id FROM changed WHERE state = 'failed')"
           ")"
           " SELECT count(*) AS changed, count(*) FILTER (WHERE state = 'queued') AS requeued FROM changed",
       params);

@@ -299,6 +299,23 @@ TEST(ResultStore, CheckpointsAreKeptUnderTheLeaseForTheNextAttempt) {
   EXPECT_TRUE(f.results.load_checkpoints(f.job).empty());
 }
 
+// A job the reaper fails for good (its attempts used up) ends like one that finished: no attempt
+// will take its checkpoints up, so they go with the same statement.
+TEST(ResultStore, AJobTheReaperFailsForGoodLeavesNoCheckpoints) {
+  JobFixture f;
+  f.pool.acquire()->exec("UPDATE jobs SET max_attempts = 2");
+  for (const char* worker : {"first", "second"}) {
+    std::optional<ClaimedJob> claimed = f.jobs.claim(worker);
+    ASSERT_TRUE(claimed);
+    f.results.fenced(claimed->lease).save_checkpoint(f.job, 0, 12, {1, 2});
+    f.pool.acquire()->exec("UPDATE jobs SET lease_expires_at = now() - interval '1 s' WHERE id = $1", {f.job});
+    ASSERT_EQ(f.jobs.reap(), 1);
+    // Re-queued after the first attempt: kept for the second; failed after the second: gone.
+    EXPECT_EQ(f.results.load_checkpoints(f.job).size(), std::string(worker) == "first" ? 1u : 0u) << worker;
+  }
+  EXPECT_EQ(f.jobs.status(f.job).state, JobState::kFailed);
+}
+
 // A worker whose lease was reaped while it stored must neither add to nor discard the results
 // of the attempt that took the job over.
 TEST(ResultStore, AWorkerThatLostItsLeaseWritesNothing) {
