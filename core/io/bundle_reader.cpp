@@ -348,7 +348,8 @@ BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& si
   // survey logs each at 20 Hz for a day, more text than its soundings (docs/any-depth.md). Its
   // problems follow the navigation's, as when read after it.
   ProblemList reference_problems;
-  std::future<void> reading_reference = std::async(std::launch::async, [&] {
+  const bool has_reference = files && files->contains(kReferenceNavFile);
+  std::future<void> reading_reference = std::async(has_reference ? std::launch::async : std::launch::deferred, [&] {
     if (auto reference = open_into(reference_problems, kReferenceNavFile, false)) {
       guarded_into(reference_problems, kReferenceNavFile,
                    [&] { survey.reference_nav = parse_nav_csv(*reference, kReferenceNavFile, reference_problems); });

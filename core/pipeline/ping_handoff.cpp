@@ -1,11 +1,15 @@
 #include "core/pipeline/ping_handoff.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace bathyslam {
 
 PingHandoff::PingHandoff(PingSink& sink, std::size_t block_beams, std::size_t queued_blocks)
-    : sink_(sink), block_beams_(block_beams), queued_blocks_(queued_blocks), thread_([this] { hand_on(); }) {}
+    : sink_(sink),
+      block_beams_(std::max<std::size_t>(block_beams, 1)),
+      queued_blocks_(std::max<std::size_t>(queued_blocks, 1)),
+      thread_([this] { hand_on(); }) {}
 
 PingHandoff::~PingHandoff() {
   {
@@ -26,7 +30,7 @@ void PingHandoff::ping(double time, std::span<const Beam> beams) {
   rethrow_if_failed();
   filling_.pings.push_back({time, filling_.beams.size(), beams.size()});
   filling_.beams.insert(filling_.beams.end(), beams.begin(), beams.end());
-  if (filling_.beams.size() >= block_beams_) send(std::exchange(filling_, {}));
+  if (filling_.beams.size() >= block_beams_ || filling_.pings.size() >= block_beams_) send(std::exchange(filling_, {}));
 }
 
 void PingHandoff::finish() { wait_until_handed_on(); }

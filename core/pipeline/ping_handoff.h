@@ -19,8 +19,8 @@ namespace bathyslam {
 
 class PingHandoff : public PingSink {
  public:
-  // At most `queued_blocks` full blocks of about `block_beams` beams wait for the sink: memory
-  // stays bounded whatever the reader's pace.
+  // At most `queued_blocks` (at least 1) full blocks of about `block_beams` beams, or as many
+  // pings, wait for the sink: memory stays bounded whatever the reader's pace, empty pings too.
   explicit PingHandoff(PingSink& sink, std::size_t block_beams = 1 << 16, std::size_t queued_blocks = 4);
   // Stops the sink's thread; pings not yet handed on are dropped (an exception is on its way).
   ~PingHandoff() override;

@@ -213,10 +213,13 @@ namespace {
 // Running jobs chosen by `where` go back to the queue while `attempts_allowed` (an expression
 // over the row, which becomes its max_attempts) is not used up and fail otherwise, with an event
 // `stage` saying `what` happened (a format() of the row's worker).
-// One statement, so the state change and its event commit together. Returns how many jobs it
-// touched, and notifies waiting workers when one was re-queued.
+// One statement, so the state change and its event commit together; a job it failed loses its
+// checkpoints in the same transaction, by a second statement: its fresh snapshot sees a checkpoint
+// that a worker, its lease expired but not yet reaped, committed while the first one ran. Returns
+// how many jobs it touched, and notifies waiting workers when one was re-queued.
 int requeue_or_fail(Connection& connection, std::string_view where, std::string_view stage, std::string_view what,
                     std::string_view attempts_allowed, const std::vector<Param>& params) {
+  Transaction transaction(connection);
   const std::string said = "format('" + std::string(what) + "', worker)";
   const std::string used_up = "attempts >= " + std::string(attempts_allowed);
   Result changed = connection.exec(
@@ -234,12 +237,14 @@ int requeue_or_fail(Connection& connection, std::string_view where, std::string_
           "  INSERT INTO job_events (job_id, attempt, stage, progress, message)"
           "  SELECT id, attempts, '" + std::string(stage) + "', 0, format('%s; %s', " + said +
           ", CASE WHEN state = 'queued' THEN 're-queued' ELSE 'failed' END) FROM changed"
-          "), dropped AS ("  // a job that failed for good leaves no checkpoints, as end_job
-          "  DELETE FROM job_checkpoints WHERE job_id IN (SELECT id FROM changed WHERE state = 'failed')"
           ")"
           " SELECT count(*) AS changed, count(*) FILTER (WHERE state = 'queued') AS requeued FROM changed",
       params);
+  if (changed.int64(0, "changed") > changed.int64(0, "requeued")) {
+    connection.exec("DELETE FROM job_checkpoints c USING jobs j WHERE j.id = c.job_id AND j.state = 'failed'");
+  }
   if (changed.int64(0, "requeued") > 0) connection.exec("SELECT pg_notify($1, '')", {kChannel});
+  transaction.commit();
   return static_cast<int>(changed.int64(0, "changed"));
 }
 
