@@ -2,8 +2,9 @@
 // A reader parses pings on one core while another makes submaps of the ones before: the sink is
 // fed on a thread of its own, in blocks of pings. On `lake` the reading (pings.csv's text) and
 // the submaps' making (georeferencing, gridding) each took about half of the serial "submaps"
-// stage (docs/performance.md). The sink sees the same pings in the same order as it would unpiped,
-// so what it makes is the same to the bit.
+// stage (docs/slam-every-seabed.md, "Speed: the serial parts around the registrations"). The
+// sink sees the same pings in the same order as it would unpiped, so what it makes is the same
+// to the bit.
 #include <condition_variable>
 #include <cstddef>
 #include <deque>

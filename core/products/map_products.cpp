@@ -18,8 +18,8 @@ MapFiles write_map_products(const PipelineResult& result, const SurveyMetadata& 
   files.geometry = map.geometry;
   std::filesystem::create_directories(dir);
   const int threads = plan_of(result.config).threads;
-  // The GeoTIFF and the BAG are GDAL's serial work: written beside the tiles and pictures they
-  // add little to the map's time (`lake`: 2.3 -> 1.5 s on two cores, docs/performance.md).
+  // The GeoTIFF and the BAG are GDAL's serial work: written beside the tiles and pictures
+  // (`lake`: the map's 2.35 s -> 1.95 s on two cores, docs/slam-every-seabed.md).
   std::future<void> rasters = std::async(threads > 1 ? std::launch::async : std::launch::deferred, [&] {
     write_geotiff(map, survey.crs, dir / "map.tif");
     write_bag(map, survey.crs, map_bag_metadata(survey.name, to_string(result.config.configuration)), dir / "map.bag");
