@@ -11,6 +11,8 @@
 namespace bathyslam {
 namespace {
 
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
 double huber(double m2, double threshold) {
   return m2 <= threshold ? m2 : 2.0 * std::sqrt(threshold * m2) - threshold;
 }
@@ -67,6 +69,50 @@ Scales minimise(const std::vector<Term>& terms, const std::vector<char>& kept, d
   search(best, 0.2, 0.05);
   search(best, 0.05, 0.01);
   return best;
+}
+
+// The translation scale that fits best at yaw scale 10^log_yaw, and its cost: one axis of
+// minimise's grid.
+struct ProfilePoint {
+  double log_t = 0, cost = 0;
+};
+
+ProfilePoint profile_over_translation(const std::vector<Term>& terms, const std::vector<char>& kept, double log_yaw,
+                                      double lowest) {
+  ProfilePoint best{lowest, kInfinity};
+  auto search = [&](double centre, double half, double delta) {
+    for (double lt = std::max(lowest, centre - half); lt <= std::min(0.0, centre + half) + 1e-9; lt += delta) {
+      const double c = cost(terms, kept, lt, log_yaw, kInfinity);
+      if (c < best.cost) best = {lt, c};
+    }
+  };
+  search(lowest / 2, -lowest / 2, 0.2);
+  search(best.log_t, 0.2, 0.05);
+  search(best.log_t, 0.05, 0.01);
+  return best;
+}
+
+// The loosest heading the innovations do not rule out (the profile likelihood within `rise` of
+// its least, bisection to 0.01 decades above the likeliest) and the translation that fits best
+// with it: a point on the likelihood's ridge, never both scales loosened at once.
+Scales loosest_heading(const std::vector<Term>& terms, const std::vector<char>& kept, Scales likeliest, double rise,
+                       double lowest) {
+  const double least = cost(terms, kept, likeliest.log_t, likeliest.log_yaw, kInfinity);
+  auto allowed = [&](double log_yaw) {
+    const ProfilePoint p = profile_over_translation(terms, kept, log_yaw, lowest);
+    return p.cost - least <= rise;
+  };
+  double inside = likeliest.log_yaw, outside = 0.0;
+  if (allowed(outside)) {
+    inside = outside;
+  } else {
+    while (outside - inside > 0.01) {
+      const double middle = 0.5 * (inside + outside);
+      (allowed(middle) ? inside : outside) = middle;
+    }
+  }
+  if (inside == likeliest.log_yaw) return likeliest;
+  return {profile_over_translation(terms, kept, inside, lowest).log_t, inside};
 }
 
 // The scales that maximise the likelihood (Huber's loss first, then the Gaussian likelihood of the
@@ -239,11 +285,14 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
     terms = std::move(with_step);
     best = next;
   }
-  const double best_t = best.scales.log_t, best_yaw = best.scales.log_yaw;
-
   out.estimated = true;
-  out.translation_scale = std::pow(10.0, best_t);
-  out.yaw_scale = std::pow(10.0, best_yaw);
+  out.likeliest_translation_scale = std::pow(10.0, best.scales.log_t);
+  out.likeliest_yaw_scale = std::pow(10.0, best.scales.log_yaw);
+  const Scales published = config.confidence_chi2 > 0
+                               ? loosest_heading(terms, best.explained, best.scales, config.confidence_chi2, lowest)
+                               : best.scales;
+  out.translation_scale = std::pow(10.0, published.log_t);
+  out.yaw_scale = std::pow(10.0, published.log_yaw);
   out.graph.dr_sigma_translation_m.head<2>() *= out.translation_scale;
   out.graph.dr_sigma_rotation_rad.z() *= out.yaw_scale;
   return out;

@@ -238,6 +238,8 @@ nlohmann::json navigation_noise_json(const NavigationNoiseEstimate& e) {
           {"innovations", e.innovations},
           {"translation_scale", e.translation_scale},
           {"yaw_scale", e.yaw_scale},
+          {"likeliest_translation_scale", e.likeliest_translation_scale},
+          {"likeliest_yaw_scale", e.likeliest_yaw_scale},
           {"dr_sigma_translation_m", {e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_translation_m.y(),
                                       e.graph.dr_sigma_translation_m.z()}},
           {"dr_sigma_rotation_rad", {e.graph.dr_sigma_rotation_rad.x(), e.graph.dr_sigma_rotation_rad.y(),
@@ -398,9 +400,9 @@ std::string report_text(const PipelineResult& r) {
   if (r.navigation_noise.estimated) {
     const NavigationNoiseEstimate& e = r.navigation_noise;
     summary += format("navigation noise   estimated from %.0f registrations: %.3f m and %.5f rad per submap step "
-                      "(Table 1 x %.3f, x %.3f)\n",
+                      "(Table 1 x %.3f, x %.3f; likeliest x %.3f, x %.3f)\n",
                       static_cast<double>(e.innovations), e.graph.dr_sigma_translation_m.x(), e.graph.dr_sigma_rotation_rad.z(),
-                      e.translation_scale, e.yaw_scale);
+                      e.translation_scale, e.yaw_scale, e.likeliest_translation_scale, e.likeliest_yaw_scale);
     for (const auto& h : e.heading_steps) {
       summary += format("  heading step     %+.1f deg between submaps %d and %d (%d registrations explained by it)\n",
                         h.jump_rad * 180 / M_PI, h.step, h.step + 1, h.explained);
