@@ -229,6 +229,7 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
                                                   const std::vector<NavigationNoiseEstimate::HeadingStep>& known_steps) {
   NavigationNoiseEstimate out;
   out.graph = prior;
+  out.likeliest_graph = prior;
   out.innovations = static_cast<int>(innovations.size());
   if (!config.estimate || out.innovations < config.min_registrations) return out;
 
@@ -293,6 +294,9 @@ NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isome
                                : best.scales;
   out.translation_scale = std::pow(10.0, published.log_t);
   out.yaw_scale = std::pow(10.0, published.log_yaw);
+  out.likeliest_graph = out.graph;
+  out.likeliest_graph.dr_sigma_translation_m.head<2>() *= out.likeliest_translation_scale;
+  out.likeliest_graph.dr_sigma_rotation_rad.z() *= out.likeliest_yaw_scale;
   out.graph.dr_sigma_translation_m.head<2>() *= out.translation_scale;
   out.graph.dr_sigma_rotation_rad.z() *= out.yaw_scale;
   return out;

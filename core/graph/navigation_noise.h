@@ -22,7 +22,10 @@
 // the navigation did; translation noise too loose lets the lines stretch where no registration
 // observes them (the same survey, 0.75 m a step: the map worse than dead reckoning's). So the
 // point moves along the ridge towards heading, and both are never loosened at once, which the
-// likelihood would rule out. What many innovations pin down stays where they pin it.
+// likelihood would rule out. What many innovations pin down stays where they pin it. A looser
+// prior also rules out fewer of a registration's aliases, and refusing a right answer as
+// ambiguous costs the map what bending gains it (channel paper seed 1), so aliases are judged
+// under the likeliest scales (`likeliest_graph`), as they were before.
 //
 // A compass step (a heading fault: one large error among small ones) is no white noise: the
 // registrations across it disagree with dead reckoning by about the same turn, and a sigma small
@@ -91,6 +94,7 @@ struct NavigationNoiseEstimate {
   double yaw_scale = 1;          // of the prior's yaw sigma, as the graph gets them
   double likeliest_translation_scale = 1, likeliest_yaw_scale = 1;  // the maximum of the likelihood
   GraphConfig graph;             // the prior with its x, y and yaw sigmas scaled, and the heading steps
+  GraphConfig likeliest_graph;   // the same at the likeliest scales, which rule out aliases
   struct HeadingStep {
     int step = 0;         // of the odometry step from node `step` to the next
     double jump_rad = 0;  // DR's heading jump there, as the registrations across it show it

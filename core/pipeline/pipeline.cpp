@@ -140,7 +140,7 @@ class NavigationNoiseTracker {
  public:
   explicit NavigationNoiseTracker(const PipelineConfig& config) : config_(config) {}
 
-  void update(Registrations& r, const std::vector<Eigen::Isometry3d>& dr_poses, DrNoiseModel& dr,
+  void update(Registrations& r, const std::vector<Eigen::Isometry3d>& dr_poses, DrNoiseModel& dr, DrNoiseModel& alias_dr,
               KnownConflicts& known_conflicts, const Plan& plan, bool last) {
     // Counted first: the innovations themselves are built only when an estimate is due.
     const auto count = static_cast<double>(std::count_if(r.constraints.begin(), r.constraints.end(),
@@ -152,12 +152,13 @@ class NavigationNoiseTracker {
                                                    config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(dr_poses, graph);
+    alias_dr = DrNoiseModel(dr_poses, r.navigation_noise.likeliest_graph);
     known_conflicts = KnownConflicts{};  // PCM's tests rest on the model
     for (Constraint& c : r.constraints) {
       if (c.type == ConstraintType::kOdometry) {
         c.information = odometry_information(graph, c.from);
       } else {
-        judge_with_prior(c, dr, dr_poses, config_, plan);
+        judge_with_prior(c, dr, alias_dr, dr_poses, config_, plan);
       }
     }
   }
@@ -194,7 +195,7 @@ const RegisteredBatch* taken_up(const RegistrationCheckpoints* checkpoints, int 
 // batches, one batch of every submap: every guess straight from dead reckoning. `r` holds dead
 // reckoning's odometry and the prior's noise when it starts.
 Registrations register_incrementally(Registrations r, const SubmapSet& submaps, const RegistrationInputs& inputs,
-                                     DrNoiseModel& dr, const PipelineConfig& config, const Plan& plan,
+                                     DrNoiseModel& dr, DrNoiseModel& alias_dr, const PipelineConfig& config, const Plan& plan,
                                      const ProgressFn& progress, const std::atomic<bool>* cancel,
                                      const RegistrationCheckpoints* checkpoints) {
   const std::vector<Eigen::Isometry3d>& dr_poses = inputs.dr_poses;
@@ -223,7 +224,7 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
       r.constraints.insert(r.constraints.end(), registered.constraints.begin(), registered.constraints.end());
     }
     inputs.prepared.trim(kPreparedSubmapsBudgetBytes);
-    if (plan.estimate_noise) noise.update(r, dr_poses, dr, known_conflicts, plan, end == n);
+    if (plan.estimate_noise) noise.update(r, dr_poses, dr, alias_dr, known_conflicts, plan, end == n);
     if (plan.consistency) {
       select_consistent_registrations(r.constraints, dr, dr_poses, config.robustness.pcm, &known_conflicts);
     }
@@ -351,14 +352,17 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
     }
 
     report("register", 0);
-    DrNoiseModel dr(dr_poses, config.graph);  // the survey's estimate replaces it as registrations come
+    // The survey's estimate replaces them as registrations come (navigation_noise.h: the loosest
+    // heading it does not rule out, and the likeliest for the aliases).
+    DrNoiseModel dr(dr_poses, config.graph), alias_dr(dr_poses, config.graph);
     // Only ours asks the cache for a submap (prepared_pair): it filters each on first use.
     const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {
       return voxel_filter(submaps.submaps[i].points, config.voxel);
     };
     GicpCloudCache prepared(submaps.submaps.size(), filtered, config.registration.gicp);
-    registered = register_incrementally(std::move(registered), submaps, {clouds, prepared, features, dr_poses, dr}, dr,
-                                        config, plan, progress, cancel, checkpoints);
+    registered = register_incrementally(std::move(registered), submaps,
+                                        {clouds, prepared, features, dr_poses, dr, alias_dr}, dr, alias_dr, config, plan,
+                                        progress, cancel, checkpoints);
   }  // freeing the clouds, features and prepared submaps is the register stage's time, not the graph's
   if (plan.registration) {
     return_freed_memory();

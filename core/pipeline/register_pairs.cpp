@@ -185,7 +185,7 @@ Constraint register_pair(const Candidate& candidate, const std::vector<Eigen::Is
                                              config.uniform_information.sigma_rotation_rad);
   }
   c.registered_information = c.information;
-  judge_with_prior(c, in.dr, in.dr_poses, config, plan);
+  judge_with_prior(c, in.dr, in.alias_dr, in.dr_poses, config, plan);
   return c;
 }
 

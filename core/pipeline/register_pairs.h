@@ -21,13 +21,15 @@ struct Candidate {
 // What registration reads besides the pairs: per submap its filtered cloud for PCL's GICP
 // (gicp.engine 0; empty with ours), or prepared once for ours when it first registers
 // (gicp.engine 1), and (with plan.features) its features; dead reckoning and its noise model
-// (the survey's estimate so far) for the DR gate, the aliases and the direct loops' reach.
+// (the survey's estimate so far) for the DR gate and the direct loops' reach, and at its
+// likeliest for the aliases (judge_with_prior).
 struct RegistrationInputs {
   const std::vector<Cloud::Ptr>& clouds;
   GicpCloudCache& prepared;
   const std::vector<SubmapFeatures>& features;
   const std::vector<Eigen::Isometry3d>& dr_poses;
   const DrNoiseModel& dr;
+  const DrNoiseModel& alias_dr;
 };
 
 // One constraint per candidate, in candidate order, each registered from the guess `estimate`

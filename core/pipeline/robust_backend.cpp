@@ -124,8 +124,8 @@ bool refused_by_prior(const Rejection& rejection, const Plan& plan) {
          (plan.alias_from_prior && rejection.kind == RejectionKind::kNotUnique);
 }
 
-void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                      const PipelineConfig& config, const Plan& plan) {
+void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel& aliases,
+                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan) {
   if (from_navigation(c.type)) return;
   // With the alias rule on, acceptance leaves the uniqueness test to resolve_alias: every
   // kNotUnique is the prior's, as every kImplausible is.
@@ -137,7 +137,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<E
   if (plan.alias_from_prior) {
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
-    resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
+    resolve_alias(c, aliases, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
                   level_from_target, config.quality.doubt_widens, config.quality.widen_min_distinctness);
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);

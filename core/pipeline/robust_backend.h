@@ -40,11 +40,13 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
 bool refused_by_prior(const Rejection& rejection, const Plan& plan);
 
 // Everything about a registration that rests on dead reckoning's noise model, decided anew:
-// the alias rule (plan.alias_from_prior) and the DR gate (plan.dr_gate), from the registration's
-// own verdict and information. A registration these refused before is tested again, so a
-// registration judged under one noise model can be judged under a better one.
-void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                      const PipelineConfig& config, const Plan& plan);
+// the alias rule (plan.alias_from_prior) under `aliases` and the DR gate (plan.dr_gate) under
+// `dr`, from the registration's own verdict and information. A registration these refused before
+// is tested again, so a registration judged under one noise model can be judged under a better
+// one. The survey's estimate gives two (navigation_noise.h): the loosest heading it does not
+// rule out for the gate, the likeliest for the aliases.
+void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel& aliases,
+                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan);
 
 // Pairwise consistency (PCM) over the accepted registrations that carry horizontal information
 // (the ones that can bend the survey); the rest of the accepted set is left out of the graph

@@ -560,11 +560,29 @@ TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
   c.registered_information = c.information;
   PipelineConfig config;
   const Plan plan = plan_of(config);
-  judge_with_prior(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, config, plan);
+  const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
+  judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
   ASSERT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
-  judge_with_prior(c, DrNoiseModel(s.result.dr_poses, survey_noise()), s.result.dr_poses, config, plan);
+  judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
   EXPECT_TRUE(c.accepted()) << c.rejection.text();
   EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+}
+
+// The survey's estimate gives the DR gate a looser heading than the likeliest
+// (navigation_noise.h); the aliases are judged under the model given for them, not the gate's.
+TEST(AliasFromPrior, AliasesAreJudgedUnderTheirOwnModelNotTheGates) {
+  const Survey2Lines s = two_lines(20, 7);
+  Constraint c = registration(s, 15, 24);
+  c.uniqueness = probed_with(sand_wave_aliases());
+  c.registered_information = c.information;
+  PipelineConfig config;
+  const Plan plan = plan_of(config);
+  const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
+  judge_with_prior(c, table_1, survey, s.result.dr_poses, config, plan);
+  EXPECT_TRUE(c.accepted()) << c.rejection.text();
+  EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+  judge_with_prior(c, survey, table_1, s.result.dr_poses, config, plan);
+  EXPECT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
 }
 
 }  // namespace
