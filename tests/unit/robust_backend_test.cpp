@@ -551,14 +551,20 @@ TEST(DoubtWidens, ADirectionTakenOutIsMarginalisedSoThatASlideDownAnObliqueValle
   EXPECT_NEAR((out.topLeftCorner<2, 2>() * Eigen::Vector2d(std::cos(removed), std::sin(removed))).norm(), 0.0, 1e-9);
 }
 
+// A registration across two lines whose probe found sand waves' aliases.
+Constraint among_sand_wave_aliases(const Survey2Lines& s) {
+  Constraint c = registration(s, 15, 24);
+  c.uniqueness = probed_with(sand_wave_aliases());
+  c.registered_information = c.information;
+  return c;
+}
+
 // A registration refused under Table 1's noise is judged again under the survey's: the prior's
 // verdicts are not final.
 TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
   const Survey2Lines s = two_lines(20, 7);
-  Constraint c = registration(s, 15, 24);
-  c.uniqueness = probed_with(sand_wave_aliases());
-  c.registered_information = c.information;
-  PipelineConfig config;
+  Constraint c = among_sand_wave_aliases(s);
+  const PipelineConfig config;
   const Plan plan = plan_of(config);
   const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
   judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
@@ -572,10 +578,8 @@ TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
 // (navigation_noise.h); the aliases are judged under the model given for them, not the gate's.
 TEST(AliasFromPrior, AliasesAreJudgedUnderTheirOwnModelNotTheGates) {
   const Survey2Lines s = two_lines(20, 7);
-  Constraint c = registration(s, 15, 24);
-  c.uniqueness = probed_with(sand_wave_aliases());
-  c.registered_information = c.information;
-  PipelineConfig config;
+  Constraint c = among_sand_wave_aliases(s);
+  const PipelineConfig config;
   const Plan plan = plan_of(config);
   const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
   judge_with_prior(c, table_1, survey, s.result.dr_poses, config, plan);
