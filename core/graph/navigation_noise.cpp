@@ -98,21 +98,21 @@ ProfilePoint profile_over_translation(const std::vector<Term>& terms, const std:
 Scales loosest_heading(const std::vector<Term>& terms, const std::vector<char>& kept, Scales likeliest, double rise,
                        double lowest) {
   const double least = cost(terms, kept, likeliest.log_t, likeliest.log_yaw, kInfinity);
-  auto allowed = [&](double log_yaw) {
+  Scales loosest = likeliest;  // the loosest heading found allowed, and its translation
+  double outside = 0.0;        // the tightest heading found ruled out
+  // Whether `log_yaw` is allowed; if so it becomes `loosest`.
+  auto try_heading = [&](double log_yaw) {
     const ProfilePoint p = profile_over_translation(terms, kept, log_yaw, lowest);
-    return p.cost - least <= rise;
+    if (p.cost - least > rise) return false;
+    loosest = {p.log_t, log_yaw};
+    return true;
   };
-  double inside = likeliest.log_yaw, outside = 0.0;
-  if (allowed(outside)) {
-    inside = outside;
-  } else {
-    while (outside - inside > 0.01) {
-      const double middle = 0.5 * (inside + outside);
-      (allowed(middle) ? inside : outside) = middle;
-    }
+  if (try_heading(outside)) return loosest;
+  while (outside - loosest.log_yaw > 0.01) {
+    const double middle = 0.5 * (loosest.log_yaw + outside);
+    if (!try_heading(middle)) outside = middle;
   }
-  if (inside == likeliest.log_yaw) return likeliest;
-  return {profile_over_translation(terms, kept, inside, lowest).log_t, inside};
+  return loosest;
 }
 
 // The scales that maximise the likelihood (Huber's loss first, then the Gaussian likelihood of the
