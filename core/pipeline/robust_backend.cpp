@@ -35,7 +35,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
 
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   bool widens, double widen_min_distinctness) {
+                   bool widens, double widen_min_distinctness, bool feature_aided_as_direct) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -81,14 +81,16 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
     c.alias = AliasResolution::kRuledOut;
     return;
   }
-  if (feature_aided) {
+  if (feature_aided && !feature_aided_as_direct) {
     c.rejection = {RejectionKind::kNotUnique,
                    format("%.0f other offsets fit nearly as well as the answer and dead reckoning allows %.0f of them "
                           "(nearest Mahalanobis2 %.1f)",
                           static_cast<double>(competitors.size()), static_cast<double>(plausible), nearest)};
     return;
   }
-  // A direct answer where an alias is plausible: with quality.doubt_widens, anywhere among the
+  // A direct answer where an alias is plausible (or a feature-aided one, which is then judged as
+  // one: its features chose among the competitors, but what it keeps is what holds at any of them):
+  // with quality.doubt_widens, anywhere among the
   // plausible competitors (their scatter added to its covariance: along a line of them, such as
   // sand-wave crests, it keeps the position across the line only as well as the line is narrow);
   // without, no horizontal information at all. Keeping the position across the line with the
@@ -138,7 +140,8 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel&
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
     resolve_alias(c, aliases, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
-                  level_from_target, config.quality.doubt_widens, config.quality.widen_min_distinctness);
+                  level_from_target, config.quality.doubt_widens, config.quality.widen_min_distinctness,
+                  config.quality.feature_aliases_as_direct);
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

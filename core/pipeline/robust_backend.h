@@ -25,7 +25,8 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 // stands, as in issue 14. Otherwise other offsets whose terrain fits nearly as well as the
 // answer's (the probe's competitors) do not refuse the answer when each of them fails the DR gate:
 // dead reckoning has chosen between them. When some do not, a feature-aided answer is refused
-// (as is one whose overlap was too small to probe) and a direct one keeps no horizontal
+// (as is one whose overlap was too small to probe), or with `feature_aided_as_direct` judged as a
+// direct one would be, and a direct one keeps no horizontal
 // information, or with `widens` has the scatter of those it allows added to its covariance,
 // unless the best other local minimum in the probe fits nearly as well as the answer
 // (distinctness under `widen_min_distinctness`; 0 here, not checked, while the pipeline's
@@ -33,7 +34,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 // lie, into the edge's residual frame.
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   bool widens = false, double widen_min_distinctness = 0);
+                   bool widens = false, double widen_min_distinctness = 0, bool feature_aided_as_direct = false);
 
 // Whether `rejection` rests on dead reckoning's noise model (the DR gate, or with
 // plan.alias_from_prior the uniqueness test), so that a better model may take it back.

@@ -382,6 +382,32 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
   EXPECT_EQ(unprobed.rejection.kind, RejectionKind::kNotUnique) << "too little overlap to probe";
 }
 
+// A feature-aided answer along a line of aliases that dead reckoning does not rule out, judged as a
+// direct answer there would be (quality.feature_aliases_as_direct): its position across the line
+// stays, nothing along it, and no yaw; refused without.
+TEST(AliasFromPrior, AFeatureAidedAnswerAmongPlausibleAliasesKeepsWhatADirectOneWould) {
+  const Survey2Lines s = two_lines(20, 7);
+  std::vector<Eigen::Vector2d> along_crest;
+  for (int x = -20; x <= 20; ++x) {
+    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
+  }
+  const DrNoiseModel table1(s.result.dr_poses, GraphConfig{});
+  const QualityConfig quality;
+  Constraint judged = registration(s, 15, 24), refused = registration(s, 15, 24);
+  judged.uniqueness = refused.uniqueness = probed_with(along_crest);
+  resolve_alias(judged, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(), true,
+                quality.widen_min_distinctness, true);
+  resolve_alias(refused, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(), true,
+                quality.widen_min_distinctness, false);
+  EXPECT_EQ(refused.rejection.kind, RejectionKind::kNotUnique) << refused.rejection.text();
+  ASSERT_TRUE(judged.accepted()) << judged.rejection.text();
+  EXPECT_EQ(judged.alias, AliasResolution::kInformationRemoved);
+  EXPECT_NEAR(judged.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
+  EXPECT_LT(judged.information(0, 0), 0.02) << "along it: no better than the aliases' spread";
+  EXPECT_NEAR(judged.information(5, 5), 0.0, 1e-12) << "no yaw: a competitor's turn is not the answer's";
+  EXPECT_GT(judged.information(2, 2), 50.0) << "depth stays";
+}
+
 // With doubt_widens, the same answer along a line of plausible aliases keeps its position across
 // the line, as well as the line is narrow, and nothing along it where the line runs on past
 // what the probe compared; a patch whose competitors run on every way keeps nothing.
@@ -568,10 +594,12 @@ TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
   const Plan plan = plan_of(config);
   const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
   judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
-  ASSERT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
+  ASSERT_EQ(c.alias, AliasResolution::kInformationRemoved);
+  ASSERT_LT(c.information(0, 0), 0.1 * c.registered_information(0, 0));
   judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
   EXPECT_TRUE(c.accepted()) << c.rejection.text();
   EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+  EXPECT_EQ(c.information, c.registered_information) << "its own information back";
 }
 
 // The survey's estimate gives the DR gate a looser heading than the likeliest
@@ -586,7 +614,7 @@ TEST(AliasFromPrior, AliasesAreJudgedUnderTheirOwnModelNotTheGates) {
   EXPECT_TRUE(c.accepted()) << c.rejection.text();
   EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
   judge_with_prior(c, survey, table_1, s.result.dr_poses, config, plan);
-  EXPECT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
+  EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
 }
 
 }  // namespace
