@@ -66,7 +66,7 @@ PoseGraphEdge identifiable_edge(const PoseGraphEdge& observed, const TerrainGrid
   c.uniqueness = probe_uniqueness(target, source, observed.measured, config.registration.uniqueness);
   const Eigen::Matrix3d level_from_target = level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
   resolve_alias(c, dr, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility, level_from_target,
-                config.quality.doubt_widens, config.quality.widen_min_distinctness, config.quality.feature_aliases_as_direct);
+                alias_rule(config.quality));
   PoseGraphEdge edge = observed;
   edge.information = c.information;
   return edge;

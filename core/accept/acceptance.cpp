@@ -89,24 +89,27 @@ Information6 quality_information(const PairRegistration& r, const QualityConfig&
     best_sigmas << config.best_sigma_translation_m, config.best_sigma_rotation_rad;
     Information6 information = observed_information(rotated(r.hessian, level_from_target), weight, best_sigmas,
                                                     config.hessian_full_share, config.hessian_zero_share);
-    // The relief cap below, kept positive semi-definite by scaling the depth row and column alike:
-    // the direct path's horizontal may yet be taken away (aliases, doubt, reach), and then its
+    // The direct path's horizontal may yet be taken away (aliases, doubt, reach), and then its
     // depth was measured where its guess put it.
-    if (r.path == RegistrationPath::kDirect && config.direct_depth_from_relief && r.uniqueness.probed &&
-        r.uniqueness.local_cost_m2 > 0 && information(2, 2) > 1.0 / r.uniqueness.local_cost_m2) {
-      const double scale = std::sqrt(1.0 / (r.uniqueness.local_cost_m2 * information(2, 2)));
-      information.row(2) *= scale;
-      information.col(2) *= scale;
+    if (r.path == RegistrationPath::kDirect && config.direct_depth_from_relief) {
+      information = with_depth_capped_by_relief(information, r.uniqueness);
     }
     return information;
   }
   Information6 information = weight * information_from_sigmas(config.best_sigma_translation_m, config.best_sigma_rotation_rad);
   if (r.path == RegistrationPath::kDirect) {
     for (int k : {0, 1, 5}) information(k, k) *= config.direct_horizontal_share;
-    if (config.direct_depth_from_relief && r.uniqueness.probed && r.uniqueness.local_cost_m2 > 0) {
-      information(2, 2) = std::min(information(2, 2), 1.0 / r.uniqueness.local_cost_m2);
-    }
+    if (config.direct_depth_from_relief) information = with_depth_capped_by_relief(information, r.uniqueness);
   }
+  return information;
+}
+
+Information6 with_depth_capped_by_relief(Information6 information, const Uniqueness& uniqueness) {
+  const double variance = uniqueness.local_cost_m2;
+  if (!uniqueness.probed || variance <= 0 || information(2, 2) <= 1.0 / variance) return information;
+  const double scale = std::sqrt(1.0 / (variance * information(2, 2)));
+  information.row(2) *= scale;
+  information.col(2) *= scale;
   return information;
 }
 

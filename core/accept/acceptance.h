@@ -25,7 +25,8 @@ struct AcceptanceConfig {  // Table 1 (b)
   // horizontal offset of the terrain within reach fits at least this many times worse (in mean
   // squared misfit) than the answer, i.e. with an RMS misfit 5x the answer's: correct answers
   // and aliases a wavelength off fall far apart on either side of it (docs/results/robustness.md).
-  // 0 turns the test off.
+  // With robustness.alias_from_prior (on) it is only where such an answer stands outright; below
+  // it dead reckoning judges the competitors (resolve_alias). 0 turns the test off.
   double min_distinctness = 25.0;
 
   template <typename Field>
@@ -109,11 +110,12 @@ struct QualityConfig {
   double widen_min_distinctness = 2.0;
   // A feature-aided answer less distinct than acceptance.min_distinctness whose competitors dead
   // reckoning does not all rule out is judged as a direct answer there would be (widened along
-  // the plausible ones, or depth, roll and pitch only) instead of refused. Its features chose
-  // among the competitors, and on `small` and `lake` every one so refused was within 0.5 m of
-  // the truth (41 on `small`'s channels and sand waves, 5 on `lake`); what it keeps holds at any
-  // competitor dead reckoning allows, so a wrong choice costs no more than a direct answer's
-  // would. 0: refused, as in issue 14.
+  // the plausible ones, or depth, roll and pitch only; its turn marginalised out and its depth
+  // capped by the relief, as a direct answer's) instead of refused. Its features chose among the
+  // competitors, and in every kept `small` matrix and `lake` report each one so refused was within
+  // 0.5 m of the truth (32-41 a matrix pass, 5 on `lake`); what it keeps holds at any competitor
+  // dead reckoning allows. Unlike a direct answer it has no start check (its start came from the
+  // features). 0: refused, as before 2026-12-07.
   bool feature_aliases_as_direct = true;
 
   template <typename Field>
@@ -149,5 +151,10 @@ double quality_weight(const PairRegistration& r);
 // (level_from_body of the target's rotation): the edge's residual is taken there.
 Information6 quality_information(const PairRegistration& r, const QualityConfig& config,
                                  const Eigen::Matrix3d& level_from_target = Eigen::Matrix3d::Identity());
+
+// Depth information no more than the relief around the answer allows (the probe's local cost as
+// a variance: QualityConfig::direct_depth_from_relief), the depth row and column scaled alike so
+// that the matrix stays positive semi-definite. Unchanged where the probe compared nothing.
+Information6 with_depth_capped_by_relief(Information6 information, const Uniqueness& uniqueness);
 
 }  // namespace bathyslam

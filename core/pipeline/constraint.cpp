@@ -80,19 +80,34 @@ Information6 with_horizontal_spread(Information6 information, const Eigen::Matri
   return information;
 }
 
+namespace {
+
+using Direction6 = Eigen::Matrix<double, 6, 1>;
+
+// `information` with the unit direction `u` of the residual marginalised out.
+Information6 marginalised(const Information6& information, const Direction6& u) {
+  const Direction6 pull = information * u;
+  const double along = u.dot(pull);
+  if (along <= 1e-12 * std::max(information.trace(), 1e-300)) return information;
+  const Information6 marginal = information - pull * pull.transpose() / along;
+  return 0.5 * (marginal + marginal.transpose());
+}
+
+}  // namespace
+
 Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction) {
   // Marginalised, not projected out: the cost minimised over an offset along the direction. A
   // projection keeps the curvature across it as if the answer were right along it; where the
   // cost's valley runs obliquely to the direction (a sand-wave train's crests under another
   // train's competitors), an answer that slid down the valley then pulls the graph across by the
   // slide's share, with the valley's steep side as its confidence (docs/slam-every-seabed.md).
-  Eigen::Matrix<double, 6, 1> u = Eigen::Matrix<double, 6, 1>::Zero();
+  Direction6 u = Direction6::Zero();
   u.head<2>() = direction.normalized();
-  const Eigen::Matrix<double, 6, 1> pull = information * u;
-  const double along = u.dot(pull);
-  if (along <= 1e-12 * std::max(information.trace(), 1e-300)) return information;
-  const Information6 marginal = information - pull * pull.transpose() / along;
-  return 0.5 * (marginal + marginal.transpose());
+  return marginalised(information, u);
+}
+
+Information6 without_yaw(const Information6& information) {
+  return marginalised(information, Direction6::Unit(5));
 }
 
 std::vector<Constraint> odometry_constraints(const std::vector<Eigen::Isometry3d>& dead_reckoning, const GraphConfig& graph) {

@@ -105,6 +105,9 @@ Information6 with_horizontal_spread(Information6 information, const Eigen::Matri
 // along it marginalised out, so that what is left holds whatever the offset there.
 Information6 without_direction(const Information6& information, const Eigen::Vector2d& direction);
 
+// Nothing known of the turn, marginalised as above: what x and y keep once yaw may be anything.
+Information6 without_yaw(const Information6& information);
+
 // The constraint as the pose graph's edge; registrations robust, the navigation's own not.
 PoseGraphEdge graph_edge(const Constraint& c);
 

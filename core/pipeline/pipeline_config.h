@@ -124,8 +124,10 @@ struct PipelineConfig {
     bool safety_net = true;
     // On a periodic or weakly textured seabed a registration's terrain also fits elsewhere (the
     // uniqueness probe's competitors). When dead reckoning rules every competitor out (each fails
-    // the DR gate) the answer stands; when it does not, a feature-aided answer is refused and a
-    // direct one keeps depth, roll and pitch only (resolve_alias). 0: issue 14's uniqueness test.
+    // the DR gate) the answer stands; when it does not, it keeps only what holds at any competitor
+    // dead reckoning allows (resolve_alias: widened along them or depth, roll and pitch only; a
+    // feature-aided answer so too, or refused: quality.feature_aliases_as_direct). 0: issue 14's
+    // uniqueness test.
     bool alias_from_prior = true;
     GraphCheckConfig line_check;
     double max_pull_sigma = 6.0;

@@ -28,6 +28,11 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
                                                       config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)))};
 }
 
+AliasRule alias_rule(const QualityConfig& quality) {
+  return {quality.doubt_widens, quality.widen_min_distinctness, quality.feature_aliases_as_direct,
+          quality.direct_depth_from_relief};
+}
+
 double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
   const Eigen::Matrix2d horizontal = dr.covariance(from, to).topLeftCorner<2, 2>();
   return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(horizontal).eigenvalues().maxCoeff()));
@@ -35,7 +40,7 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
 
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   bool widens, double widen_min_distinctness, bool feature_aided_as_direct) {
+                   const AliasRule& rule) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -81,16 +86,16 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
     c.alias = AliasResolution::kRuledOut;
     return;
   }
-  if (feature_aided && !feature_aided_as_direct) {
+  if (feature_aided && !rule.feature_aided_as_direct) {
     c.rejection = {RejectionKind::kNotUnique,
                    format("%.0f other offsets fit nearly as well as the answer and dead reckoning allows %.0f of them "
                           "(nearest Mahalanobis2 %.1f)",
                           static_cast<double>(competitors.size()), static_cast<double>(plausible), nearest)};
     return;
   }
-  // A direct answer where an alias is plausible (or a feature-aided one, which is then judged as
-  // one: its features chose among the competitors, but what it keeps is what holds at any of them):
-  // with quality.doubt_widens, anywhere among the
+  // A direct answer where an alias is plausible (or a feature-aided one, judged as one: its
+  // features chose among the competitors, but what it keeps must hold at any of them, so no turn
+  // and no more depth than the relief allows): with quality.doubt_widens, anywhere among the
   // plausible competitors (their scatter added to its covariance: along a line of them, such as
   // sand-wave crests, it keeps the position across the line only as well as the line is narrow);
   // without, no horizontal information at all. Keeping the position across the line with the
@@ -98,7 +103,11 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   // 7-17 sigma off across the line, the truth not among the probe's competitors.
   c.alias_spread_m = spread_of(plausible_spread / plausible);
   c.alias = AliasResolution::kInformationRemoved;
-  if (!widens || !carries_horizontal_information(c.information) || u.distinctness() < widen_min_distinctness) {
+  if (feature_aided) {
+    c.information = without_yaw(c.information);
+    if (rule.depth_from_relief) c.information = with_depth_capped_by_relief(c.information, u);
+  }
+  if (!rule.widens || !carries_horizontal_information(c.information) || u.distinctness() < rule.widen_min_distinctness) {
     c.information = without_horizontal(c.information);
     return;
   }
@@ -136,12 +145,12 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel&
   if (plan.quality_aware) c.information = c.registered_information;
   c.alias = AliasResolution::kNone;
   c.alias_mahalanobis2 = -1;
+  c.alias_spread_m.setZero();
   if (plan.alias_from_prior) {
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
     resolve_alias(c, aliases, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
-                  level_from_target, config.quality.doubt_widens, config.quality.widen_min_distinctness,
-                  config.quality.feature_aliases_as_direct);
+                  level_from_target, alias_rule(config.quality));
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

@@ -20,21 +20,32 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
 // how far from the truth a guess it gives may be.
 double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);
 
+// What resolve_alias does with an answer some plausible competitor contends with (QualityConfig's
+// doubt_widens, widen_min_distinctness, feature_aliases_as_direct, direct_depth_from_relief);
+// all off, the rule as it first was.
+struct AliasRule {
+  bool widens = false;                  // widened along the plausible competitors, not stripped
+  double widen_min_distinctness = 0;    // ... unless another basin fits nearly as well
+  bool feature_aided_as_direct = false;  // a feature-aided answer judged as a direct one, not refused
+  bool depth_from_relief = false;       // ... its depth then capped as a direct answer's is
+};
+AliasRule alias_rule(const QualityConfig& quality);
+
 // The uniqueness test with dead reckoning's word (robustness.alias_from_prior), for an accepted
 // registration with its information. A feature-aided answer at least `min_distinctness` distinct
 // stands, as in issue 14. Otherwise other offsets whose terrain fits nearly as well as the
 // answer's (the probe's competitors) do not refuse the answer when each of them fails the DR gate:
-// dead reckoning has chosen between them. When some do not, a feature-aided answer is refused
-// (as is one whose overlap was too small to probe), or with `feature_aided_as_direct` judged as a
-// direct one would be, and a direct one keeps no horizontal
-// information, or with `widens` has the scatter of those it allows added to its covariance,
+// dead reckoning has chosen between them. When some do not, a direct answer keeps no horizontal
+// information, or with `rule.widens` has the scatter of those it allows added to its covariance,
 // unless the best other local minimum in the probe fits nearly as well as the answer
-// (distinctness under `widen_min_distinctness`; 0 here, not checked, while the pipeline's
-// QualityConfig says 2). `level_from_target` turns the target submap's frame, where the offsets
-// lie, into the edge's residual frame.
+// (distinctness under `rule.widen_min_distinctness`); a feature-aided one is refused, or with
+// `rule.feature_aided_as_direct` judged as a direct one would be (its turn marginalised out, its
+// depth capped by the relief). One whose overlap was too small to probe is refused either way.
+// `level_from_target` turns the target submap's frame, where the offsets lie, into the edge's
+// residual frame.
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   bool widens = false, double widen_min_distinctness = 0, bool feature_aided_as_direct = false);
+                   const AliasRule& rule = {});
 
 // Whether `rejection` rests on dead reckoning's noise model (the DR gate, or with
 // plan.alias_from_prior the uniqueness test), so that a better model may take it back.

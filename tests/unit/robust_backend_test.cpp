@@ -384,28 +384,35 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
 
 // A feature-aided answer along a line of aliases that dead reckoning does not rule out, judged as a
 // direct answer there would be (quality.feature_aliases_as_direct): its position across the line
-// stays, nothing along it, and no yaw; refused without.
+// stays, with its turn marginalised out, nothing along the line, no yaw, and no more depth than the
+// relief allows; refused without.
 TEST(AliasFromPrior, AFeatureAidedAnswerAmongPlausibleAliasesKeepsWhatADirectOneWould) {
   const Survey2Lines s = two_lines(20, 7);
   std::vector<Eigen::Vector2d> along_crest;
   for (int x = -20; x <= 20; ++x) {
     if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
   }
+  Uniqueness crest = probed_with(along_crest);
+  crest.alternative_cost_m2 = 10 * crest.cost_at_answer_m2;  // another basin clearly worse
+  crest.local_cost_m2 = 0.01;                                // relief: depth to 0.1 m at best
   const DrNoiseModel table1(s.result.dr_poses, GraphConfig{});
-  const QualityConfig quality;
   Constraint judged = registration(s, 15, 24), refused = registration(s, 15, 24);
-  judged.uniqueness = refused.uniqueness = probed_with(along_crest);
-  resolve_alias(judged, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(), true,
-                quality.widen_min_distinctness, true);
-  resolve_alias(refused, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(), true,
-                quality.widen_min_distinctness, false);
+  judged.uniqueness = refused.uniqueness = crest;
+  // The answer's y and its turn measured together: y alone is known less well than its 0.1 m.
+  judged.information(1, 5) = judged.information(5, 1) = 0.5 * std::sqrt(judged.information(1, 1) * judged.information(5, 5));
+  const double y_given_any_turn = judged.information(1, 1) - judged.information(1, 5) * judged.information(1, 5) / judged.information(5, 5);
+  resolve_alias(judged, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(),
+                AliasRule{true, 2.0, true, true});
+  resolve_alias(refused, table1, s.result.dr_poses, 25.0, PlausibilityConfig{}, Eigen::Matrix3d::Identity(),
+                AliasRule{true, 2.0, false, true});
   EXPECT_EQ(refused.rejection.kind, RejectionKind::kNotUnique) << refused.rejection.text();
   ASSERT_TRUE(judged.accepted()) << judged.rejection.text();
   EXPECT_EQ(judged.alias, AliasResolution::kInformationRemoved);
-  EXPECT_NEAR(judged.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
+  EXPECT_GT(judged.alias_spread_m.x(), 10.0) << "the aliases' line, reported";
+  EXPECT_NEAR(judged.information(1, 1), y_given_any_turn, 1.0) << "across the line: y whatever the turn (75, not 100)";
   EXPECT_LT(judged.information(0, 0), 0.02) << "along it: no better than the aliases' spread";
   EXPECT_NEAR(judged.information(5, 5), 0.0, 1e-12) << "no yaw: a competitor's turn is not the answer's";
-  EXPECT_GT(judged.information(2, 2), 50.0) << "depth stays";
+  EXPECT_NEAR(judged.information(2, 2), 100.0, 1e-6) << "depth as the relief allows, not its own 400";
 }
 
 // With doubt_widens, the same answer along a line of plausible aliases keeps its position across
@@ -421,7 +428,7 @@ TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) 
   Uniqueness crest = probed_with(along_crest);
   Constraint closed = direct_registration(s, 15, 24, crest);
   resolve_alias(closed, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
-                Eigen::Matrix3d::Identity(), true);
+                Eigen::Matrix3d::Identity(), AliasRule{true});
   EXPECT_EQ(closed.alias, AliasResolution::kInformationRemoved);
   EXPECT_NEAR(closed.information(1, 1), 100.0, 1.0) << "across the line: the answer's own 0.1 m";
   EXPECT_GT(closed.information(0, 0), 0.0);
@@ -432,7 +439,7 @@ TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) 
   mark_open(crest, {{-20, 0}, {20, 0}});
   Constraint open = direct_registration(s, 15, 24, crest);
   resolve_alias(open, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
-                Eigen::Matrix3d::Identity(), true);
+                Eigen::Matrix3d::Identity(), AliasRule{true});
   EXPECT_NEAR(open.information(0, 0), 0.0, 1e-9) << "the line runs on: nothing along it";
   EXPECT_NEAR(open.information(1, 1), 100.0, 1.0);
 
@@ -447,7 +454,7 @@ TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) 
   mark_open(patch_probe, rim);
   Constraint patch = direct_registration(s, 15, 24, patch_probe);
   resolve_alias(patch, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
-                Eigen::Matrix3d::Identity(), true);
+                Eigen::Matrix3d::Identity(), AliasRule{true});
   for (int k : {0, 1, 5}) EXPECT_NEAR(patch.information(k, k), 0.0, 1e-9) << k;
 }
 
@@ -467,7 +474,7 @@ TEST(AliasFromPrior, WideningNeedsTheAnswerToFitClearlyBetterThanAnyOtherBasin) 
     crest.alternative_cost_m2 = distinctness * crest.cost_at_answer_m2;
     Constraint c = direct_registration(s, 15, 24, crest);
     resolve_alias(c, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
-                  Eigen::Matrix3d::Identity(), true, min_distinctness);
+                  Eigen::Matrix3d::Identity(), AliasRule{true, min_distinctness});
     EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
     EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
     if (distinctness < min_distinctness) {
@@ -585,14 +592,24 @@ Constraint among_sand_wave_aliases(const Survey2Lines& s) {
   return c;
 }
 
-// A registration refused under Table 1's noise is judged again under the survey's: the prior's
-// verdicts are not final.
+// A registration judged under Table 1's noise is judged again under the survey's: the prior's
+// verdicts are not final, a refusal (feature-aided answers refused among plausible aliases) as
+// much as a loss of information.
 TEST(AliasFromPrior, AVerdictIsTakenAgainUnderABetterNoiseModel) {
   const Survey2Lines s = two_lines(20, 7);
   Constraint c = among_sand_wave_aliases(s);
-  const PipelineConfig config;
+  PipelineConfig config;
   const Plan plan = plan_of(config);
   const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{}), survey(s.result.dr_poses, survey_noise());
+
+  config.quality.feature_aliases_as_direct = false;
+  judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
+  ASSERT_EQ(c.rejection.kind, RejectionKind::kNotUnique);
+  judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
+  EXPECT_TRUE(c.accepted()) << c.rejection.text();
+  EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
+
+  config.quality.feature_aliases_as_direct = true;
   judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
   ASSERT_EQ(c.alias, AliasResolution::kInformationRemoved);
   ASSERT_LT(c.information(0, 0), 0.1 * c.registered_information(0, 0));
@@ -614,6 +631,7 @@ TEST(AliasFromPrior, AliasesAreJudgedUnderTheirOwnModelNotTheGates) {
   EXPECT_TRUE(c.accepted()) << c.rejection.text();
   EXPECT_EQ(c.alias, AliasResolution::kRuledOut);
   judge_with_prior(c, survey, table_1, s.result.dr_poses, config, plan);
+  EXPECT_TRUE(c.accepted()) << c.rejection.text();
   EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
 }
 
