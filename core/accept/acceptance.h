@@ -117,6 +117,13 @@ struct QualityConfig {
   // dead reckoning allows. Unlike a direct answer it has no start check (its start came from the
   // features). 0: refused, as before 2026-12-07.
   bool feature_aliases_as_direct = true;
+  // A direct answer keeps no yaw, so the DR gate cannot see its turn; but where GICP turned the
+  // overlap further from dead reckoning's heading than the heading noise allows (the squared turn
+  // over DR's yaw variance between the two submaps above this: 25 is 5σ), its position was found
+  // together with a wrong turn and keeps no horizontal information (`small` channel seed 5: a loop
+  // turned 4.4° and 0.8 m off at 7σ under two drifts; seeds 1–3 and 4–6 otherwise all but
+  // unchanged, docs/slam-every-seabed.md). Judged again under each noise estimate. 0: not tested.
+  double max_turn_chi2 = 25.0;
 
   template <typename Field>
   void fields(Field&& field) {
@@ -133,6 +140,7 @@ struct QualityConfig {
     field("doubt_widens", doubt_widens, 0, 1);
     field("widen_min_distinctness", widen_min_distinctness, 0, 1e6);
     field("feature_aliases_as_direct", feature_aliases_as_direct, 0, 1);
+    field("max_turn_chi2", max_turn_chi2, 0, 1e6);
   }
 };
 

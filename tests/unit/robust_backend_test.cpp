@@ -415,6 +415,38 @@ TEST(AliasFromPrior, AFeatureAidedAnswerAmongPlausibleAliasesKeepsWhatADirectOne
   EXPECT_NEAR(judged.information(2, 2), 100.0, 1e-6) << "depth as the relief allows, not its own 400";
 }
 
+// A direct answer turned far beyond what dead reckoning's heading noise allows keeps no horizontal
+// information (quality.max_turn_chi2): the DR gate cannot see the turn, the answer keeping no yaw.
+TEST(DrGate, ADirectAnswerTurnedBeyondTheHeadingNoiseKeepsNoPosition) {
+  const Survey2Lines s = two_lines(20, 7);
+  const DrNoiseModel survey(s.result.dr_poses, survey_noise());
+  const Eigen::Vector2d unique_far_away(23, 23);  // one competitor, ruled out by dead reckoning
+  PipelineConfig config;
+  const Plan plan = plan_of(config);
+  for (const double turn_deg : {0.5, 6.0}) {
+    Constraint c = direct_registration(s, 15, 24, probed_with({unique_far_away}));
+    c.measured = pose(0, 0, turn_deg * kDeg) * c.measured;
+    for (int k : {3, 4, 5}) c.information.row(k).setZero(), c.information.col(k).setZero();
+    c.registered_information = c.information;
+    judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
+    ASSERT_TRUE(c.accepted()) << turn_deg << ": " << c.rejection.text();
+    if (turn_deg < 1) {
+      EXPECT_GT(c.information(1, 1), 50.0) << "a turn within the heading noise (0.02 rad over 9 steps)";
+    } else {
+      EXPECT_NEAR(c.information(0, 0), 0.0, 1e-12) << "turned 6 degrees: no position";
+      EXPECT_NEAR(c.information(1, 1), 0.0, 1e-12);
+      EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
+    }
+  }
+  config.quality.max_turn_chi2 = 0;
+  Constraint c = direct_registration(s, 15, 24, probed_with({unique_far_away}));
+  c.measured = pose(0, 0, 6.0 * kDeg) * c.measured;
+  for (int k : {3, 4, 5}) c.information.row(k).setZero(), c.information.col(k).setZero();
+  c.registered_information = c.information;
+  judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
+  EXPECT_GT(c.information(1, 1), 50.0) << "not tested";
+}
+
 // With doubt_widens, the same answer along a line of plausible aliases keeps its position across
 // the line, as well as the line is narrow, and nothing along it where the line runs on past
 // what the probe compared; a patch whose competitors run on every way keeps nothing.
