@@ -28,6 +28,13 @@ void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const st
                                                       config.chi2_threshold, static_cast<double>(std::abs(c.to - c.from)))};
 }
 
+void drop_position_if_turned(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                             double max_turn_chi2) {
+  if (max_turn_chi2 <= 0 || c.path != RegistrationPath::kDirect || !carries_horizontal_information(c.information)) return;
+  const double turn = dr_innovation(graph_edge(c), dr, dr_poses).difference(5);
+  if (turn * turn > max_turn_chi2 * dr.covariance(c.from, c.to)(5, 5)) c.information = without_horizontal(c.information);
+}
+
 AliasRule alias_rule(const QualityConfig& quality) {
   return {quality.doubt_widens, quality.widen_min_distinctness, quality.feature_aliases_as_direct,
           quality.direct_depth_from_relief};
@@ -146,15 +153,7 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel&
   c.alias = AliasResolution::kNone;
   c.alias_mahalanobis2 = -1;
   c.alias_spread_m.setZero();
-  // A direct answer's turn is not in its information, so the DR gate cannot refuse it; a position
-  // found together with a turn the heading noise rules out is not kept (quality.max_turn_chi2).
-  if (config.quality.max_turn_chi2 > 0 && c.path == RegistrationPath::kDirect && carries_horizontal_information(c.information)) {
-    const DrInnovation turn = dr_innovation(graph_edge(c), dr, dr_poses);
-    const double variance = dr.covariance(c.from, c.to)(5, 5);
-    if (turn.difference(5) * turn.difference(5) > config.quality.max_turn_chi2 * variance) {
-      c.information = without_horizontal(c.information);
-    }
-  }
+  if (plan.quality_aware && plan.dr_gate) drop_position_if_turned(c, dr, dr_poses, config.quality.max_turn_chi2);
   if (plan.alias_from_prior) {
     const Eigen::Matrix3d level_from_target =
         level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();

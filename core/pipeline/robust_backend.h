@@ -16,6 +16,13 @@ namespace bathyslam {
 void gate_against_dead_reckoning(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                                  const PlausibilityConfig& config);
 
+// A direct answer's turn is not in its information, so the DR gate cannot refuse it; where GICP
+// turned the overlap against dead reckoning's heading by more than the heading noise between the
+// two submaps allows (squared turn over DR's yaw variance above `max_turn_chi2`; 0: not tested),
+// its position was found together with a wrong turn: it keeps depth, roll and pitch only.
+void drop_position_if_turned(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                             double max_turn_chi2);
+
 // Dead reckoning's horizontal standard deviation between two submaps along its worst direction:
 // how far from the truth a guess it gives may be.
 double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to);

@@ -307,6 +307,15 @@ void mark_open(Uniqueness& u, const std::vector<Eigen::Vector2d>& open) {
   for (const Eigen::Vector2d& o : open) u.open_competitors[probe_bit(o)] = true;
 }
 
+// A crest along x: every offset on it from 3 m out to the probe's overlap's end at |x| = 20 fits.
+std::vector<Eigen::Vector2d> crest_along_x() {
+  std::vector<Eigen::Vector2d> along_crest;
+  for (int x = -20; x <= 20; ++x) {
+    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
+  }
+  return along_crest;
+}
+
 // Sand waves 10 m apart, crests along y: the terrain also fits 10 and 20 m away across them.
 std::vector<Eigen::Vector2d> sand_wave_aliases() { return {{-20, 0}, {-10, 0}, {10, 0}, {20, 0}}; }
 
@@ -388,11 +397,7 @@ TEST(AliasFromPrior, AFeatureAidedAnswerIsRefusedOnlyWhereDeadReckoningAllowsAnA
 // relief allows; refused without.
 TEST(AliasFromPrior, AFeatureAidedAnswerAmongPlausibleAliasesKeepsWhatADirectOneWould) {
   const Survey2Lines s = two_lines(20, 7);
-  std::vector<Eigen::Vector2d> along_crest;
-  for (int x = -20; x <= 20; ++x) {
-    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
-  }
-  Uniqueness crest = probed_with(along_crest);
+  Uniqueness crest = probed_with(crest_along_x());
   crest.alternative_cost_m2 = 10 * crest.cost_at_answer_m2;  // another basin clearly worse
   crest.local_cost_m2 = 0.01;                                // relief: depth to 0.1 m at best
   const DrNoiseModel table1(s.result.dr_poses, GraphConfig{});
@@ -423,11 +428,16 @@ TEST(DrGate, ADirectAnswerTurnedBeyondTheHeadingNoiseKeepsNoPosition) {
   const Eigen::Vector2d unique_far_away(23, 23);  // one competitor, ruled out by dead reckoning
   PipelineConfig config;
   const Plan plan = plan_of(config);
-  for (const double turn_deg : {0.5, 6.0}) {
+  // The pair's truth turned by `turn_deg`, with a direct answer's information (no roll, pitch, yaw).
+  const auto turned = [&](double turn_deg) {
     Constraint c = direct_registration(s, 15, 24, probed_with({unique_far_away}));
     c.measured = pose(0, 0, turn_deg * kDeg) * c.measured;
     for (int k : {3, 4, 5}) c.information.row(k).setZero(), c.information.col(k).setZero();
     c.registered_information = c.information;
+    return c;
+  };
+  for (const double turn_deg : {0.5, 6.0}) {
+    Constraint c = turned(turn_deg);
     judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
     ASSERT_TRUE(c.accepted()) << turn_deg << ": " << c.rejection.text();
     if (turn_deg < 1) {
@@ -438,13 +448,16 @@ TEST(DrGate, ADirectAnswerTurnedBeyondTheHeadingNoiseKeepsNoPosition) {
       EXPECT_GT(c.information(2, 2), 50.0) << "depth stays";
     }
   }
+  Constraint untested = turned(6.0);
   config.quality.max_turn_chi2 = 0;
-  Constraint c = direct_registration(s, 15, 24, probed_with({unique_far_away}));
-  c.measured = pose(0, 0, 6.0 * kDeg) * c.measured;
-  for (int k : {3, 4, 5}) c.information.row(k).setZero(), c.information.col(k).setZero();
-  c.registered_information = c.information;
-  judge_with_prior(c, survey, survey, s.result.dr_poses, config, plan);
-  EXPECT_GT(c.information(1, 1), 50.0) << "not tested";
+  judge_with_prior(untested, survey, survey, s.result.dr_poses, config, plan);
+  EXPECT_GT(untested.information(1, 1), 50.0) << "not tested";
+
+  // Nor without the DR gate (the `gicp` baseline's plan): the paper's method stays as it was.
+  Constraint baseline = turned(6.0);
+  const PipelineConfig gicp = preset_config(Configuration::kGicp);
+  judge_with_prior(baseline, survey, survey, s.result.dr_poses, gicp, plan_of(gicp));
+  EXPECT_GT(baseline.information(1, 1), 50.0) << "no DR gate, no turn test";
 }
 
 // With doubt_widens, the same answer along a line of plausible aliases keeps its position across
@@ -453,11 +466,7 @@ TEST(DrGate, ADirectAnswerTurnedBeyondTheHeadingNoiseKeepsNoPosition) {
 TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) {
   const Survey2Lines s = two_lines(20, 7);
   // Crests along x: the aliases lie along x, the probe's overlap ending at |x| = 20.
-  std::vector<Eigen::Vector2d> along_crest;
-  for (int x = -20; x <= 20; ++x) {
-    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
-  }
-  Uniqueness crest = probed_with(along_crest);
+  Uniqueness crest = probed_with(crest_along_x());
   Constraint closed = direct_registration(s, 15, 24, crest);
   resolve_alias(closed, DrNoiseModel(s.result.dr_poses, GraphConfig{}), s.result.dr_poses, 25.0, PlausibilityConfig{},
                 Eigen::Matrix3d::Identity(), AliasRule{true});
@@ -495,11 +504,7 @@ TEST(AliasFromPrior, WideningKeepsTheDirectAnswersPositionAcrossALineOfAliases) 
 // alias (on `small` sand waves and channels, loops 2-14 m off), and keeps nothing horizontal.
 TEST(AliasFromPrior, WideningNeedsTheAnswerToFitClearlyBetterThanAnyOtherBasin) {
   const Survey2Lines s = two_lines(20, 7);
-  std::vector<Eigen::Vector2d> along_crest;
-  for (int x = -20; x <= 20; ++x) {
-    if (std::abs(x) >= 3) along_crest.emplace_back(x, 0);
-  }
-  Uniqueness crest = probed_with(along_crest);
+  Uniqueness crest = probed_with(crest_along_x());
   const double min_distinctness = QualityConfig{}.widen_min_distinctness;
   ASSERT_GT(min_distinctness, 1.0);
   for (const double distinctness : {0.9, 0.99 * min_distinctness, 1.01 * min_distinctness, 4.0}) {
