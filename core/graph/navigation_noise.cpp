@@ -223,6 +223,11 @@ DrInnovation dr_innovation(const PoseGraphEdge& edge, const DrNoiseModel& dr,
   return {edge.from, edge.to, pose_difference(measured.measured, dr.relative_pose(edge.from, edge.to)), measured.covariance};
 }
 
+GraphConfig alias_graph(const NavigationNoiseEstimate& estimate, const NavigationNoiseConfig& config) {
+  const bool at_bound = estimate.likeliest_yaw_scale <= config.min_scale * (1 + 1e-6);
+  return at_bound ? estimate.graph : estimate.likeliest_graph;
+}
+
 NavigationNoiseEstimate estimate_navigation_noise(const std::vector<Eigen::Isometry3d>& dead_reckoning,
                                                   const std::vector<DrInnovation>& innovations, const GraphConfig& prior,
                                                   const NavigationNoiseConfig& config,

@@ -103,6 +103,14 @@ struct NavigationNoiseEstimate {
   std::vector<HeadingStep> heading_steps;
 };
 
+// The noise model aliases are judged under: the likeliest scales where the likelihood has its
+// maximum inside their range. At the least yaw scale allowed it says only that the innovations so
+// far show no heading drift (a few registrations that agree), which is no evidence that dead
+// reckoning rules an alias out; there the loosest heading not ruled out (`graph`) judges them too
+// (`lake`-size slope break heading-walk seed 2: 9 innovations, the likeliest at its bound, a loop
+// whose every alias it "ruled out" kept 23.7 m off at 32 sigma).
+GraphConfig alias_graph(const NavigationNoiseEstimate& estimate, const NavigationNoiseConfig& config);
+
 // The maximum-likelihood scales over grids in log space (0.2 decades over the whole range, then
 // 0.05 and 0.01 about the best), which the likelihood's few local minima do not mislead.
 // `known_steps` (an earlier estimate's) are kept as found, new ones looked for beside them.

@@ -152,7 +152,7 @@ class NavigationNoiseTracker {
                                                    config_.graph, config_.navigation_noise, r.navigation_noise.heading_steps);
     const GraphConfig& graph = r.navigation_noise.graph;
     dr = DrNoiseModel(dr_poses, graph);
-    alias_dr = DrNoiseModel(dr_poses, r.navigation_noise.likeliest_graph);
+    alias_dr = DrNoiseModel(dr_poses, alias_graph(r.navigation_noise, config_.navigation_noise));
     known_conflicts = KnownConflicts{};  // PCM's tests rest on the model
     for (Constraint& c : r.constraints) {
       if (c.type == ConstraintType::kOdometry) {

@@ -189,5 +189,24 @@ TEST(NavigationNoise, WhatFewRegistrationsCannotRuleOutStaysAllowed) {
   EXPECT_GE(likeliest_below, 5) << "the test needs seeds whose likeliest heading noise is too stiff";
 }
 
+// Registrations that agree with dead reckoning exactly put the likeliest heading noise at its
+// least scale: they show no drift, which is no evidence that dead reckoning rules aliases out, so
+// aliases are judged under the loosest heading not ruled out. Where the innovations show a drift,
+// its likeliest noise judges them, as before.
+TEST(NavigationNoise, AliasesAreJudgedUnderTheLikeliestHeadingOnlyWhereTheDataDetermineIt) {
+  const NavigationNoiseConfig config;
+  const Lawnmower straight = lawnmower(2, 10, 0.0, 1);  // dead reckoning without heading drift
+  const NavigationNoiseEstimate calm = estimate_navigation_noise(straight.dr, between_lines(straight, 2), GraphConfig{}, config);
+  ASSERT_TRUE(calm.estimated);
+  ASSERT_NEAR(calm.likeliest_yaw_scale, config.min_scale, 1e-12) << "the likelihood's maximum at its bound";
+  ASSERT_GT(calm.yaw_scale, 10 * calm.likeliest_yaw_scale) << "what few innovations do not rule out";
+  EXPECT_EQ(alias_graph(calm, config).dr_sigma_rotation_rad, calm.graph.dr_sigma_rotation_rad);
+
+  const Lawnmower walk = lawnmower(6, 30, 0.003, 1);
+  const NavigationNoiseEstimate drift = estimate_navigation_noise(walk.dr, between_lines(walk, 6), GraphConfig{}, config);
+  ASSERT_GT(drift.likeliest_yaw_scale, 10 * config.min_scale);
+  EXPECT_EQ(alias_graph(drift, config).dr_sigma_rotation_rad, drift.likeliest_graph.dr_sigma_rotation_rad);
+}
+
 }  // namespace
 }  // namespace bathyslam
