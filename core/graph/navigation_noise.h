@@ -25,7 +25,8 @@
 // likelihood would rule out. What many innovations pin down stays where they pin it. A looser
 // prior also rules out fewer of a registration's aliases, and refusing a right answer as
 // ambiguous costs the map what bending gains it (channel paper seed 1), so aliases are judged
-// under the likeliest scales (`likeliest_graph`), as they were before.
+// under the likeliest scales (`likeliest_graph`), as they were before, unless the likeliest heading
+// sits at its bound (alias_graph).
 //
 // A compass step (a heading fault: one large error among small ones) is no white noise: the
 // registrations across it disagree with dead reckoning by about the same turn, and a sigma small

@@ -353,7 +353,7 @@ PipelineResult run(SubmapSet built, std::chrono::steady_clock::time_point built_
 
     report("register", 0);
     // The survey's estimate replaces them as registrations come (navigation_noise.h: the loosest
-    // heading it does not rule out, and the likeliest for the aliases).
+    // heading it does not rule out, and for the aliases alias_graph's).
     DrNoiseModel dr(dr_poses, config.graph), alias_dr(dr_poses, config.graph);
     // Only ours asks the cache for a submap (prepared_pair): it filters each on first use.
     const auto filtered = [&](std::size_t i) -> Cloud::ConstPtr {

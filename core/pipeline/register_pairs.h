@@ -22,7 +22,7 @@ struct Candidate {
 // (gicp.engine 0; empty with ours), or prepared once for ours when it first registers
 // (gicp.engine 1), and (with plan.features) its features; dead reckoning and its noise model
 // (the survey's estimate so far) for the DR gate and the direct loops' reach, and at its
-// likeliest for the aliases (judge_with_prior).
+// likeliest for the aliases where the data determine it (alias_graph, judge_with_prior).
 struct RegistrationInputs {
   const std::vector<Cloud::Ptr>& clouds;
   GicpCloudCache& prepared;

@@ -63,7 +63,7 @@ bool refused_by_prior(const Rejection& rejection, const Plan& plan);
 // `dr`, from the registration's own verdict and information. A registration these refused before
 // is tested again, so a registration judged under one noise model can be judged under a better
 // one. The survey's estimate gives two (navigation_noise.h): the loosest heading it does not
-// rule out for the gate, the likeliest for the aliases.
+// rule out for the gate, for the aliases the likeliest where the data determine it (alias_graph).
 void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel& aliases,
                       const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan);
 
