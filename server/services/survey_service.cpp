@@ -1,5 +1,6 @@
 #include "server/services/survey_service.h"
 
+
 #include "core/fuse/fuse.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
@@ -8,6 +9,7 @@
 #include "core/pipeline/streamed_survey.h"
 #include "core/summary/survey_summary.h"
 #include "server/log.h"
+#include "server/services/chunk_writer.h"
 #include "server/storage/stored_bundle.h"
 
 namespace bathyslam::server {
@@ -16,6 +18,10 @@ namespace {
 namespace storage = bathyslam::storage;
 
 constexpr std::size_t kMaxChunkBytes = 1 << 20;
+// At most this many bytes of an upload are committed in one transaction (ChunkWriter).
+constexpr std::size_t kBatchBytes = 8 << 20;
+// How long a resumed upload waits for an earlier stream of its file to store what it received.
+constexpr std::chrono::seconds kEarlierStreamPatience{10};
 // gRPC carries a status message in a trailer of limited size: the first problems go there,
 // GetSurvey lists them all.
 constexpr std::size_t kProblemsInStatus = 40;
@@ -180,25 +186,39 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
     check_declaration(first, context_.limits);
     const StreamSlots::Slot slot = slot_or_refuse(upload_slots_, tenant, "UploadFile streams in progress",
                                                   "--max-upload-streams", "let one finish first");
+    const FilesBeingWritten::Mark writing = files_being_written_.mark_when_idle({survey_id, name}, kEarlierStreamPatience);
     storage::Sha256 digest{};
     std::copy(first.sha256().begin(), first.sha256().end(), digest.begin());
     check_first_offset(context_.surveys, survey_id, first, digest);
     try {
       storage::UploadState state = context_.surveys.begin_upload(survey_id, name, first.size_bytes(), digest);
-      // Each chunk is committed as it arrives: a cut stream keeps everything received before it.
       // A stream from the file's start hashes as it goes, so the whole file is not read back.
       std::optional<storage::Sha256Stream> from_start;
       if (first.offset() == 0) from_start.emplace();
+      ChunkWriter writer(
+          [&](const std::vector<ChunkWriter::Chunk>& chunks) {
+            return context_.surveys.append_chunks(survey_id, name, chunks, from_start ? &*from_start : nullptr);
+          },
+          kBatchBytes);
       auto append = [&](const v1::UploadFileRequest& message) {
-        storage::Bytes data(message.data().begin(), message.data().end());
-        state = context_.surveys.append_chunk(survey_id, name, message.offset(), data, from_start ? &*from_start : nullptr);
+        writer.add({message.offset(), storage::Bytes(message.data().begin(), message.data().end())});
       };
-      if (!first.data().empty()) append(first);
-      v1::UploadFileRequest message;
-      while (reader->Read(&message)) {
-        check_continuation(first, message);
-        append(message);
+      try {
+        if (!first.data().empty()) append(first);
+        v1::UploadFileRequest message;
+        while (reader->Read(&message)) {
+          check_continuation(first, message);
+          append(message);
+        }
+      } catch (...) {
+        // What arrived before a bad message is kept, as when each chunk was committed alone.
+        try {
+          writer.finish(state);
+        } catch (...) {
+        }
+        throw;
       }
+      state = writer.finish(state);
       describe_upload(state, reply);
       if (state.complete) log("survey %lld: %s uploaded, %lld bytes", static_cast<long long>(survey_id), quoted_input(name).c_str(),
                               static_cast<long long>(state.size_bytes));
@@ -213,6 +233,7 @@ grpc::Status SurveyService::GetUploadStatus(grpc::ServerContext* call, const v1:
   return handle("GetUploadStatus", call, [&] {
     owned_survey(context_, caller_tenant(context_, *call), request->survey_id());
     check_text("file_name", request->file_name());
+    files_being_written_.wait_until_idle({request->survey_id(), request->file_name()}, kEarlierStreamPatience);
     auto state = context_.surveys.upload_state(request->survey_id(), request->file_name());
     if (!state) throw Refusal(grpc::StatusCode::NOT_FOUND, "file_name: no upload of " + quoted_input(request->file_name()));
     describe_upload(*state, reply);

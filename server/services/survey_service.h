@@ -4,6 +4,7 @@
 
 #include "bathyslam/v1/survey.grpc.pb.h"
 #include "server/services/service_context.h"
+#include "server/services/files_being_written.h"
 #include "server/services/stream_slots.h"
 
 namespace bathyslam::server {
@@ -38,6 +39,7 @@ class SurveyService final : public v1::SurveyService::Service {
   // slowed every other tenant's calls to seconds (issue 37).
   StreamSlots upload_slots_;
   StreamSlots finalize_slots_;
+  FilesBeingWritten files_being_written_;
 };
 
 }  // namespace bathyslam::server

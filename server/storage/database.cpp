@@ -124,6 +124,10 @@ double Result::float8(int row, int column) const { return parse_double(text(row,
 bool Result::boolean(int row, int column) const { return text(row, column) == "t"; }
 
 Bytes Result::bytes(int row, int column) const {
+  if (PQfformat(result_.get(), column) == 1) {
+    const auto* raw = reinterpret_cast<const unsigned char*>(PQgetvalue(result_.get(), row, column));
+    return Bytes(raw, raw + PQgetlength(result_.get(), row, column));
+  }
   std::size_t length = 0;
   unsigned char* raw = PQunescapeBytea(reinterpret_cast<const unsigned char*>(PQgetvalue(result_.get(), row, column)),
                                        &length);
@@ -179,7 +183,11 @@ Result Connection::exec(std::string_view sql, std::initializer_list<Param> param
   return exec(sql, std::vector<Param>(params));
 }
 
-Result Connection::exec(std::string_view sql, const std::vector<Param>& params) {
+Result Connection::exec(std::string_view sql, const std::vector<Param>& params) { return run(sql, params, 0); }
+
+Result Connection::exec_binary(std::string_view sql, const std::vector<Param>& params) { return run(sql, params, 1); }
+
+Result Connection::run(std::string_view sql, const std::vector<Param>& params, int result_format) {
   std::vector<const char*> values;
   std::vector<int> lengths, formats;
   for (const Param& param : params) {
@@ -189,7 +197,25 @@ Result Connection::exec(std::string_view sql, const std::vector<Param>& params) 
   }
   std::string statement(sql);
   return checked(conn_.get(), PQexecParams(conn_.get(), statement.c_str(), static_cast<int>(params.size()),
-                                           nullptr, values.data(), lengths.data(), formats.data(), 0));
+                                           nullptr, values.data(), lengths.data(), formats.data(), result_format));
+}
+
+void Connection::copy_in(std::string_view copy_statement, std::string_view data) {
+  std::string statement(copy_statement);
+  PGresult* started = PQexec(conn_.get(), statement.c_str());
+  if (started == nullptr || PQresultStatus(started) != PGRES_COPY_IN) {
+    checked(conn_.get(), started);  // throws the server's reason
+    throw DatabaseError("08P01", "not a COPY FROM STDIN: " + statement);
+  }
+  PQclear(started);
+  constexpr std::size_t kPiece = 1 << 20;
+  for (std::size_t at = 0; at < data.size(); at += kPiece) {
+    const std::size_t n = std::min(kPiece, data.size() - at);
+    if (PQputCopyData(conn_.get(), data.data() + at, static_cast<int>(n)) != 1) throw connection_error(conn_.get());
+  }
+  if (PQputCopyEnd(conn_.get(), nullptr) != 1) throw connection_error(conn_.get());
+  // The COPY's own result, then the end of results.
+  for (PGresult* raw; (raw = PQgetResult(conn_.get())) != nullptr;) checked(conn_.get(), raw);
 }
 
 void Connection::exec_script(std::string_view sql) {

@@ -1,6 +1,8 @@
 // Surveys, their files and tenants' tokens.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "core/io/file_bytes.h"
 #include "server/storage/survey_store.h"
 #include "tests/integration/fresh_database.h"
@@ -306,6 +308,43 @@ TEST(SurveyStore, AStreamHashedAsItArrivesIsJudgedLikeTheStoredBytes) {
   store.append_chunk(survey, "pings.csv", 4, piece(nav, 4, 8));
   EXPECT_TRUE(store.append_chunk(survey, "pings.csv", 8, piece(nav, 8, 10)).complete);
   EXPECT_EQ(store.read_file(survey, "pings.csv"), nav);
+}
+
+// An upload's chunks are stored a batch at a time: a refused chunk keeps the ones before it, as
+// when each came in a transaction of its own, and bytes of every value come back as they went.
+TEST(SurveyStore, ChunksStoredTogetherKeepThoseBeforeARefusedOne) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 1);
+  SurveyStore store(pool, 4);
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "lake", "", nlohmann::json::object(), nlohmann::json::object());
+  Bytes file(40);  // ten chunks: read back in more than one round trip
+  for (std::size_t i = 0; i < file.size(); ++i) file[i] = static_cast<std::uint8_t>(i % 2 == 0 ? 0 : 255 - i);
+  const auto piece = [&](std::size_t from, std::size_t to) { return Bytes(file.begin() + from, file.begin() + to); };
+  store.begin_upload(survey, "pings.csv", 40, sha256(file));
+
+  // The third chunk skips a byte: the first two are kept, the refusal says where to resume.
+  try {
+    store.append_chunks(survey, "pings.csv", {{0, piece(0, 4)}, {4, piece(4, 8)}, {9, piece(9, 10)}});
+    FAIL() << "a chunk past the committed bytes was stored";
+  } catch (const UploadError& e) {
+    EXPECT_EQ(e.kind(), UploadError::Kind::kBadOffset);
+    EXPECT_NE(std::string(e.what()).find("8 bytes"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(store.upload_state(survey, "pings.csv")->committed_bytes, 8);
+
+  // A batch refused at its first chunk (too large) changes nothing.
+  EXPECT_THROW(store.append_chunks(survey, "pings.csv", {{8, piece(0, 5)}}), UploadError);
+  EXPECT_EQ(store.upload_state(survey, "pings.csv")->committed_bytes, 8);
+
+  std::vector<SurveyStore::Chunk> rest;
+  for (std::size_t at = 8; at < file.size(); at += 4) rest.push_back({static_cast<std::int64_t>(at), piece(at, at + 4)});
+  EXPECT_TRUE(store.append_chunks(survey, "pings.csv", rest).complete);
+  EXPECT_EQ(store.read_file(survey, "pings.csv"), file);
+  const std::filesystem::path copy = std::filesystem::temp_directory_path() / ("chunks-" + std::to_string(survey) + ".bin");
+  store.export_file(survey, "pings.csv", copy);
+  std::ifstream in(copy, std::ios::binary);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), std::string(file.begin(), file.end()));
+  std::filesystem::remove(copy);
 }
 
 }  // namespace
