@@ -83,6 +83,9 @@ class PingSink {
 // and beams. A bundle with errors comes back without a survey as from read_bundle, but the sink
 // has seen pings by then: the caller discards what it made of them.
 BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& sink);
+class BundleSource;
+// The same from files kept elsewhere (core/io/bundle_files.h).
+BundleReadResult stream_bundle(const BundleSource& bundle, PingSink& sink);
 
 class BundleError : public std::runtime_error {
  public:

@@ -309,14 +309,21 @@ void parse_pings_csv(ByteSource& source, std::string_view file, const std::optio
 }
 
 BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& sink) {
-  ProblemList problems;
-  Survey survey;
   std::optional<BundleFiles> files;
   try {
     files.emplace(bundle);
   } catch (const std::exception& e) {
-    problems.error("", 0, "", e.what());  // the bundle itself; the message names it
+    BundleReadResult result;
+    result.problems.push_back({Problem::Severity::kError, "", 0, "", e.what()});  // the bundle itself; the message names it
+    return result;
   }
+  return stream_bundle(*files, sink);
+}
+
+BundleReadResult stream_bundle(const BundleSource& bundle, PingSink& sink) {
+  ProblemList problems;
+  Survey survey;
+  const BundleSource* files = &bundle;
   auto open_into = [&](ProblemList& said, std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
     if (!files) return nullptr;
     if (!files->contains(file)) {

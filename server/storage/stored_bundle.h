@@ -18,6 +18,13 @@ bool is_bundle_file(const std::string& name);
 // A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
 // that they can be read more than once: a job streams the pings into its submaps, then again
 // into the corrected GSF, never holding the soundings whole; a validation streams them once.
+// A survey's uploaded files read once, its pings handed to `sink`: a bundle straight from the
+// database (each file streamed chunk by chunk, its checksum verified at its end, the database's
+// reading beside the parsing), sonar files through a scratch copy, as their readers need files.
+// Problems name the upload's files, never a scratch path. For a validation.
+BundleReadResult read_stored_survey(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root,
+                                    PingSink& sink);
+
 class StoredSurveyCopy {
  public:
   // Throws what the store throws (a transient database error may be retried).

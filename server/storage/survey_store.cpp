@@ -4,6 +4,7 @@
 #include <openssl/rand.h>
 
 #include <algorithm>
+#include <cstring>
 #include <type_traits>
 #include <fstream>
 #include <future>
@@ -34,30 +35,114 @@ Sha256 to_sha256(const Bytes& bytes) {
   return digest;
 }
 
-// Reads a file's chunks in order into `sink`, eight a round trip, the next eight fetched while
-// the sink takes these (the database's reading and decompressing beside the caller's hashing and
-// writing; memory: sixteen chunks).
+// A file's chunks in order from the database, eight a query, the next eight fetched while the
+// caller takes these (the database's reading and decompressing beside the caller's work;
+// memory: sixteen chunks).
+class ChunkStream {
+ public:
+  ChunkStream(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, std::string name)
+      : connection_(connection), file_id_(file_id), chunk_count_(chunk_count), name_(std::move(name)) {
+    fetch_from(0);
+  }
+  ChunkStream(const ChunkStream&) = delete;
+  ChunkStream& operator=(const ChunkStream&) = delete;
+
+  // The next chunk's bytes, valid until the next call; empty at the end (no chunk is empty).
+  std::span<const std::uint8_t> next() {
+    if (!rows_ || row_ == rows_->rows()) {
+      if (!coming_.valid()) return {};
+      const std::int64_t first = asked_;
+      rows_.emplace(coming_.get());
+      row_ = 0;
+      const std::int64_t expected = std::min(chunk_count_, first + kChunksPerQuery) - first;
+      if (rows_->rows() != expected)
+        throw std::runtime_error("survey file '" + name_ + "': " + std::to_string(expected - rows_->rows()) + " of chunks " +
+                                 std::to_string(first) + " to " + std::to_string(first + expected - 1) + " are missing");
+      fetch_from(first + kChunksPerQuery);
+    }
+    // A binary result's cell is the value's bytes themselves.
+    const std::string_view cell = rows_->text(row_++, 0);
+    return {reinterpret_cast<const std::uint8_t*>(cell.data()), cell.size()};
+  }
+
+ private:
+  static constexpr std::int64_t kChunksPerQuery = 8;
+
+  void fetch_from(std::int64_t first) {
+    if (first >= chunk_count_) return;
+    asked_ = first;
+    coming_ = std::async(std::launch::async, [this, first] {
+      return connection_.exec_binary(
+          "SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq >= $2 AND seq < $3 ORDER BY seq",
+          {file_id_, first, std::min(chunk_count_, first + kChunksPerQuery)});
+    });
+  }
+
+  Connection& connection_;
+  std::int64_t file_id_, chunk_count_;
+  std::string name_;
+  std::optional<Result> rows_;
+  int row_ = 0;
+  std::int64_t asked_ = 0;       // the first chunk of the query coming
+  std::future<Result> coming_;  // last: waited for before the rest goes
+};
+
+// Reads a file's chunks in order into `sink`.
 template <typename Sink>
 void for_each_chunk(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, const std::string& name,
                     Sink&& sink) {
-  constexpr std::int64_t kChunksPerQuery = 8;
-  auto fetch = [&connection, file_id, chunk_count](std::int64_t first) {
-    return connection.exec_binary(
-        "SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq >= $2 AND seq < $3 ORDER BY seq",
-        {file_id, first, std::min(chunk_count, first + kChunksPerQuery)});
-  };
-  std::future<Result> next;
-  if (chunk_count > 0) next = std::async(std::launch::async, fetch, 0);
-  for (std::int64_t first = 0; first < chunk_count; first += kChunksPerQuery) {
-    const Result chunks = next.get();
-    if (first + kChunksPerQuery < chunk_count) next = std::async(std::launch::async, fetch, first + kChunksPerQuery);
-    const std::int64_t expected = std::min(chunk_count, first + kChunksPerQuery) - first;
-    if (chunks.rows() != expected)
-      throw std::runtime_error("survey file '" + name + "': " + std::to_string(expected - chunks.rows()) + " of chunks " +
-                               std::to_string(first) + " to " + std::to_string(first + expected - 1) + " are missing");
-    for (int row = 0; row < chunks.rows(); ++row) sink(chunks.bytes(row, 0));
-  }
+  ChunkStream chunks(connection, file_id, chunk_count, name);
+  for (auto chunk = chunks.next(); !chunk.empty(); chunk = chunks.next()) sink(chunk);
 }
+
+// A complete file read from the database as a ByteSource, its size and SHA-256 checked at the end.
+class StoredFileSource : public ByteSource {
+ public:
+  StoredFileSource(PooledConnection connection, std::int64_t file_id, std::int64_t chunk_count, std::int64_t size,
+                   Sha256 sha256, std::string name)
+      : connection_(std::move(connection)),
+        size_(size),
+        sha256_(sha256),
+        name_(name),
+        chunks_(std::make_unique<ChunkStream>(*connection_, file_id, chunk_count, std::move(name))) {}
+
+  std::size_t read(char* buffer, std::size_t size) override {
+    std::size_t n = 0;
+    while (n < size && !ended_) {
+      if (left_.empty()) {
+        left_ = chunks_->next();
+        if (left_.empty()) {
+          end();
+          break;
+        }
+        digest_.add(left_);
+        read_ += static_cast<std::int64_t>(left_.size());
+      }
+      const std::size_t take = std::min(size - n, left_.size());
+      std::memcpy(buffer + n, left_.data(), take);
+      left_ = left_.subspan(take);
+      n += take;
+    }
+    return n;
+  }
+
+ private:
+  void end() {
+    ended_ = true;
+    if (read_ != size_ || digest_.finish() != sha256_)
+      throw std::runtime_error("survey file '" + name_ + "' does not match the size and SHA-256 recorded at upload");
+  }
+
+  PooledConnection connection_;
+  std::int64_t size_;
+  Sha256 sha256_;
+  std::string name_;
+  std::unique_ptr<ChunkStream> chunks_;  // after the connection: goes first
+  std::span<const std::uint8_t> left_;
+  Sha256Stream digest_;
+  std::int64_t read_ = 0;
+  bool ended_ = false;
+};
 
 constexpr std::string_view kSurveyColumns =
     "SELECT s.id, s.tenant_id, s.name, s.crs, s.sonar, s.vehicle, coalesce(v.valid, false) AS ready"
@@ -107,7 +192,7 @@ Sha256Stream::Sha256Stream() : context_(EVP_MD_CTX_new(), &EVP_MD_CTX_free) {
   if (!context_ || !EVP_DigestInit_ex(context_.get(), EVP_sha256(), nullptr)) throw std::runtime_error("SHA-256 failed");
 }
 
-void Sha256Stream::add(const Bytes& bytes) {
+void Sha256Stream::add(std::span<const std::uint8_t> bytes) {
   if (!EVP_DigestUpdate(context_.get(), bytes.data(), bytes.size())) throw std::runtime_error("SHA-256 failed");
 }
 
@@ -266,7 +351,7 @@ Bytes SurveyStore::read_file(std::int64_t survey_id, const std::string& name) {
   Bytes content;
   content.reserve(static_cast<std::size_t>(file.int64(0, "size_bytes")));
   for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name,
-                 [&](const Bytes& data) { content.insert(content.end(), data.begin(), data.end()); });
+                 [&](std::span<const std::uint8_t> data) { content.insert(content.end(), data.begin(), data.end()); });
   if (static_cast<std::int64_t>(content.size()) != file.int64(0, "size_bytes") ||
       digest_bytes(sha256(content)) != file.bytes(0, "sha256"))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
@@ -570,7 +655,7 @@ UploadState SurveyStore::append_chunks(std::int64_t survey_id, const std::string
   if (now.complete) {
     const Sha256 received = from_start ? from_start->finish() : [&] {
       Sha256Stream digest;
-      for_each_chunk(*connection, file.file_id, now.chunks, name, [&](const Bytes& bytes) { digest.add(bytes); });
+      for_each_chunk(*connection, file.file_id, now.chunks, name, [&](std::span<const std::uint8_t> bytes) { digest.add(bytes); });
       return digest.finish();
     }();
     if (received != to_sha256(file.sha256)) {
@@ -613,7 +698,7 @@ void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, c
   Sha256Stream digest;
   std::int64_t size = 0;
   std::ofstream out(to, std::ios::binary);
-  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name, [&](const Bytes& data) {
+  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name, [&](std::span<const std::uint8_t> data) {
     digest.add(data);
     size += static_cast<std::int64_t>(data.size());
     out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
@@ -622,6 +707,16 @@ void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, c
   close_checked(out, to);
   if (size != file.int64(0, "size_bytes") || digest.finish() != to_sha256(file.bytes(0, "sha256")))
     throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
+}
+
+std::unique_ptr<ByteSource> SurveyStore::open_file(std::int64_t survey_id, const std::string& name) {
+  auto connection = pool_.acquire();
+  Result file = connection->exec(
+      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
+      {survey_id, name});
+  if (file.rows() == 0) throw std::out_of_range("survey " + std::to_string(survey_id) + " has no complete file '" + name + "'");
+  return std::make_unique<StoredFileSource>(std::move(connection), file.int64(0, "id"), file.int64(0, "chunk_count"),
+                                            file.int64(0, "size_bytes"), to_sha256(file.bytes(0, "sha256")), name);
 }
 
 }  // namespace bathyslam::storage

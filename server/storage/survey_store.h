@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/io/byte_source.h"
 #include "server/storage/database.h"
 
 namespace bathyslam::storage {
@@ -105,7 +107,7 @@ struct TokenInfo {
 class Sha256Stream {
  public:
   Sha256Stream();
-  void add(const Bytes& bytes);
+  void add(std::span<const std::uint8_t> bytes);
   Sha256 finish();  // once
 
  private:
@@ -174,6 +176,10 @@ class SurveyStore {
   // Copies a complete file to `to` chunk by chunk, checking its SHA-256 on the way. A write the
   // disk refuses (full, failing) throws WriteError: never a shorter copy for a reader to judge.
   void export_file(std::int64_t survey_id, const std::string& name, const std::filesystem::path& to);
+  // A complete file's bytes streamed from the database, holding a pool connection while it
+  // lives; at the end its size and SHA-256 are checked against the upload's (std::runtime_error
+  // naming the file when they differ). Throws std::out_of_range when there is no such file.
+  std::unique_ptr<ByteSource> open_file(std::int64_t survey_id, const std::string& name);
   // Reassembles a file and checks its size and SHA-256; throws std::out_of_range if there is no
   // such file and std::runtime_error if it does not match what was uploaded.
   Bytes read_file(std::int64_t survey_id, const std::string& name);

@@ -347,5 +347,27 @@ TEST(SurveyStore, ChunksStoredTogetherKeepThoseBeforeARefusedOne) {
   std::filesystem::remove(copy);
 }
 
+// A file streamed from the database reads as it was uploaded, and one whose storage no longer
+// matches its upload is refused at its end rather than read as if whole.
+TEST(SurveyStore, AFileReadStraightFromTheDatabaseIsCheckedAtItsEnd) {
+  testing::FreshDatabase db;
+  ConnectionPool pool(db.conninfo(), 2);
+  SurveyStore store(pool, 5);
+  const Bytes nav = bytes_of("time,easting,northing,depth,roll,pitch,heading\n1,2,3,4,5,6,7\n8,9,10,11,12,13,14\n");
+  const std::int64_t survey = store.create_survey(store.create_tenant("acme"), "lake", {{"nav.csv", nav}});
+  auto read_all_of = [&](std::size_t piece) {
+    const std::unique_ptr<ByteSource> in = store.open_file(survey, "nav.csv");
+    std::string text, buffer(piece, '\0');
+    while (const std::size_t n = in->read(buffer.data(), buffer.size())) text.append(buffer.data(), n);
+    return text;
+  };
+  EXPECT_EQ(read_all_of(3), std::string(nav.begin(), nav.end()));
+  EXPECT_EQ(read_all_of(1000), std::string(nav.begin(), nav.end()));
+  EXPECT_THROW(store.open_file(survey, "pings.csv"), std::out_of_range);
+
+  db.scalar("WITH c AS (UPDATE survey_file_chunks SET data = 'XXXXX' WHERE seq = 12 RETURNING 1) SELECT count(*) FROM c");
+  EXPECT_THROW(read_all_of(1000), std::runtime_error);
+}
+
 }  // namespace
 }  // namespace bathyslam::storage

@@ -521,8 +521,7 @@ class ServerStopTest(unittest.TestCase):
 
 class ScratchDiskFullTest(unittest.TestCase):
     """Issue 37 fault 2: a full scratch disk is the server's shortage, not a verdict on the survey.
-    The scratch is a tmpfs filled to the last page, so that even survey.json's 627 bytes, which
-    wait in the copy's buffer, fail only when the copy is closed (root mounts it; skipped else)."""
+    The scratch is a tmpfs filled to the last page (root mounts it; skipped else)."""
 
     def setUp(self):
         self.disk = tempfile.mkdtemp(prefix="full-", dir=STUBS)
@@ -541,22 +540,29 @@ class ScratchDiskFullTest(unittest.TestCase):
         self.addCleanup(self.server.stop)
 
     def test_a_full_scratch_disk_is_resource_exhausted_and_stores_no_verdict(self):
+        """Sonar files are copied to the scratch disk to be read; a bundle is read straight from the database."""
         surveys = self.server.surveys
-        survey_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="full disk", crs="EPSG:32651"), timeout=30).id
-        self.assertTrue(surveys.UploadFile(upload_requests(survey_id, "survey.json", read("survey.json")), timeout=60).complete)
+        bundle_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="full disk", crs="EPSG:32651"), timeout=30).id
+        self.assertTrue(surveys.UploadFile(upload_requests(bundle_id, "survey.json", read("survey.json")), timeout=60).complete)
+        with self.assertRaises(grpc.RpcError) as raised:
+            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=bundle_id), timeout=60)
+        self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
+        self.assertIn("nav.csv: missing from the upload", raised.exception.details())
+
+        sonar_id = surveys.CreateSurvey(survey_pb2.CreateSurveyRequest(name="full disk sonar"), timeout=30).id
+        self.assertTrue(surveys.UploadFile(upload_requests(sonar_id, "probe.gsf", b"x" * 4096), timeout=60).complete)
         before = database_fingerprint(self.server.url)
         with self.assertRaises(grpc.RpcError) as raised:
-            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=60)
+            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=sonar_id), timeout=60)
         self.assertEqual(raised.exception.code(), grpc.StatusCode.RESOURCE_EXHAUSTED, raised.exception.details())
         self.assertEqual(raised.exception.details(), "the server's scratch space is full; nothing was stored, try again later")
         self.assertEqual(database_fingerprint(self.server.url), before, "the database changed")
-        # With space again, the verdict is about the survey: its missing files.
+        # With space again, the verdict is about the survey: its damaged file.
         os.remove(self.filler)
         with self.assertRaises(grpc.RpcError) as raised:
-            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=survey_id), timeout=60)
+            surveys.FinalizeSurvey(survey_pb2.FinalizeSurveyRequest(survey_id=sonar_id), timeout=60)
         self.assertEqual(raised.exception.code(), grpc.StatusCode.INVALID_ARGUMENT, raised.exception.details())
-        self.assertIn("nav.csv", raised.exception.details())
-        self.assertNotIn("not valid JSON", raised.exception.details())
+        self.assertIn("probe.gsf", raised.exception.details())
 
 
 class WatchStreamLimitTest(unittest.TestCase):
