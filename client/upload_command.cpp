@@ -4,12 +4,17 @@
 #include <openssl/evp.h>
 
 #include <algorithm>
+#include <mutex>
+#include <exception>
+#include <atomic>
 #include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <utility>
+#include <map>
 #include <thread>
 #include <vector>
 
@@ -62,6 +67,44 @@ std::string file_sha256(const LocalFile& file) {
   EVP_DigestFinal_ex(context.get(), digest.data(), &length);
   return std::string(digest.begin(), digest.end());
 }
+
+// The bytes sent of every file, on one line (files go side by side), with lines said above it.
+class Progress {
+ public:
+  explicit Progress(std::int64_t total) : total_(total) {}
+  // `file` has `bytes` on the server (a resumed or retried file starts again where it stood).
+  void at(const std::string& file, std::int64_t bytes) {
+    std::lock_guard lock(mutex_);
+    done_ += bytes - std::exchange(at_[file], bytes);
+    const auto now = std::chrono::steady_clock::now();
+    if (now - drawn_ < std::chrono::milliseconds(100) && done_ < total_) return;
+    drawn_ = now;
+    draw();
+  }
+  void say(const std::string& line) {
+    std::lock_guard lock(mutex_);
+    std::fprintf(stderr, "\r%-100s\r  %s\n", "", line.c_str());
+    draw();
+  }
+  void end() {
+    std::lock_guard lock(mutex_);
+    draw();
+    std::fprintf(stderr, "\n");
+  }
+
+ private:
+  void draw() {
+    const double seconds = std::max(1e-3, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+    progress_line("upload", total_ ? static_cast<double>(done_) / total_ : 1,
+                  megabytes(done_) + " of " + megabytes(total_) + ", " + megabytes(done_ / seconds) + "/s");
+  }
+
+  std::mutex mutex_;
+  std::int64_t total_, done_ = 0;
+  std::map<std::string, std::int64_t> at_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point drawn_{};
+};
 
 // The survey's name when survey.json has none: the folder's, or the tar's without ".tar".
 std::string default_name(const std::filesystem::path& bundle) {
@@ -135,7 +178,7 @@ std::int64_t find_or_create_survey(v1::SurveyService::Stub& surveys, const Uploa
 
 // Uploads one file from the committed size on; false when stopped by --stop-after-bytes.
 bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t survey_id,
-                 const LocalFile& file, std::int64_t& budget) {
+                 const LocalFile& file, std::int64_t& budget, Progress& progress) {
   const std::string& name = file.name;
   const std::int64_t size = file.size;
   const std::string digest = file_sha256(file);
@@ -148,12 +191,15 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
   const grpc::Status asked = surveys.GetUploadStatus(o.remote.context(30).get(), ask, &status);
   if (asked.ok() && status.size_bytes() == size && status.sha256() == digest) {
     if (status.complete()) {
-      std::fprintf(stderr, "  %-18s uploaded already (%s)\n", name.c_str(), megabytes(size).c_str());
+      progress.say(name + " uploaded already (" + megabytes(size) + ")");
+      progress.at(name, size);
       return true;
     }
     offset = status.committed_bytes();
-    if (offset > 0) std::fprintf(stderr, "  resuming %s at %lld of %lld bytes\n", name.c_str(),
-                                 static_cast<long long>(offset), static_cast<long long>(size));
+    if (offset > 0) {
+      progress.say("resuming " + name + " at " + std::to_string(offset) + " of " + std::to_string(size) + " bytes");
+      progress.at(name, offset);
+    }
   } else if (!asked.ok() && asked.error_code() != grpc::StatusCode::NOT_FOUND) {
     check("GetUploadStatus", asked);
   }
@@ -167,8 +213,6 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
   message.set_file_name(name);
   message.set_size_bytes(size);
   message.set_sha256(digest);
-  const auto start = std::chrono::steady_clock::now();
-  const std::int64_t first = offset;
   std::string buffer(kChunkBytes, '\0');
   bool first_message = true;
   while (first_message || offset < size) {
@@ -186,17 +230,14 @@ bool upload_file(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::
     message.clear_file_name();
     message.clear_size_bytes();
     message.clear_sha256();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    progress_line(name, size ? static_cast<double>(offset) / size : 1,
-                  megabytes(offset) + " of " + megabytes(size) + ", " + megabytes((offset - first) / std::max(seconds, 1e-3)) + "/s");
+    progress.at(name, offset);
   }
   writer->WritesDone();
   const grpc::Status done = writer->Finish();
-  std::fprintf(stderr, "\n");
   check("UploadFile " + name, done);
   if (!reply.complete()) {
-    std::fprintf(stderr, "  %s: stopped at %lld of %lld bytes; run the same command again to resume\n", name.c_str(),
-                 static_cast<long long>(reply.committed_bytes()), static_cast<long long>(size));
+    progress.say(name + ": stopped at " + std::to_string(reply.committed_bytes()) + " of " + std::to_string(size) +
+                 " bytes; run the same command again to resume");
     return false;
   }
   return true;
@@ -221,6 +262,40 @@ auto retrying(const UploadOptions& o, Step&& step) {
   }
 }
 
+// Uploads the files side by side, a few at a time (each file's hash, stream and transactions
+// beside the others'), or one after another under --stop-after-bytes, whose budget is counted in
+// file order. Throws the first failure once the files begun are done.
+void upload_files(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t id, const std::vector<LocalFile>& files) {
+  constexpr std::size_t kFilesAtOnce = 4;
+  std::int64_t total = 0;
+  for (const LocalFile& file : files) total += file.size;
+  Progress progress(total);
+  std::int64_t budget = o.stop_after_bytes;
+  std::atomic<std::size_t> next = 0;
+  std::atomic<bool> stopped = false;
+  std::mutex failure_mutex;
+  std::exception_ptr failure;
+  auto work = [&] {
+    for (std::size_t k; !stopped && (k = next++) < files.size();) {
+      try {
+        if (!retrying(o, [&] { return upload_file(surveys, o, id, files[k], budget, progress); }))
+          throw std::runtime_error("upload interrupted (--stop-after-bytes)");
+      } catch (...) {
+        std::lock_guard lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        stopped = true;
+      }
+    }
+  };
+  const std::size_t threads = o.stop_after_bytes > 0 ? 1 : std::min(kFilesAtOnce, files.size());
+  std::vector<std::thread> workers;
+  for (std::size_t t = 1; t < threads; ++t) workers.emplace_back(work);
+  work();
+  for (std::thread& worker : workers) worker.join();
+  progress.end();
+  if (failure) std::rethrow_exception(failure);
+}
+
 void run_upload(const UploadOptions& o) {
   auto channel = o.remote.channel();
   auto surveys = v1::SurveyService::NewStub(channel);
@@ -237,11 +312,7 @@ void run_upload(const UploadOptions& o) {
   bool ready = false;
   const std::int64_t id = retrying(o, [&] { return find_or_create_survey(*surveys, o, declared, ready); });
   if (!ready) {
-    std::int64_t budget = o.stop_after_bytes;
-    for (const LocalFile& file : files) {
-      if (!retrying(o, [&] { return upload_file(*surveys, o, id, file, budget); }))
-        throw std::runtime_error("upload interrupted (--stop-after-bytes)");
-    }
+    upload_files(*surveys, o, id, files);
     v1::FinalizeSurveyRequest finalize;
     finalize.set_survey_id(id);
     v1::Survey survey;
