@@ -4,18 +4,18 @@
 #include <openssl/evp.h>
 
 #include <algorithm>
-#include <mutex>
-#include <exception>
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <functional>
-#include <memory>
-#include <utility>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -265,7 +265,8 @@ auto retrying(const UploadOptions& o, Step&& step) {
 // Uploads the files side by side, a few at a time (each file's hash, stream and transactions
 // beside the others'), or one after another under --stop-after-bytes, whose budget is counted in
 // file order. Throws the first failure once the files begun are done.
-void upload_files(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t id, const std::vector<LocalFile>& files) {
+void upload_files(v1::SurveyService::Stub& surveys, const UploadOptions& o, std::int64_t id,
+                  const std::vector<LocalFile>& files) {
   constexpr std::size_t kFilesAtOnce = 4;
   std::int64_t total = 0;
   for (const LocalFile& file : files) total += file.size;

@@ -323,15 +323,13 @@ BundleReadResult stream_bundle(const std::filesystem::path& bundle, PingSink& si
 BundleReadResult stream_bundle(const BundleSource& bundle, PingSink& sink) {
   ProblemList problems;
   Survey survey;
-  const BundleSource* files = &bundle;
   auto open_into = [&](ProblemList& said, std::string_view file, bool required) -> std::unique_ptr<ByteSource> {
-    if (!files) return nullptr;
-    if (!files->contains(file)) {
-      if (required) said.error(std::string(file), 0, "", "missing from " + files->name());
+    if (!bundle.contains(file)) {
+      if (required) said.error(std::string(file), 0, "", "missing from " + bundle.name());
       return nullptr;
     }
     try {
-      return files->open(file);
+      return bundle.open(file);
     } catch (const std::exception& e) {
       said.error(std::string(file), 0, "", e.what());
       return nullptr;
@@ -355,7 +353,7 @@ BundleReadResult stream_bundle(const BundleSource& bundle, PingSink& sink) {
   // survey logs each at 20 Hz for a day, more text than its soundings (docs/any-depth.md). Its
   // problems follow the navigation's, as when read after it.
   ProblemList reference_problems;
-  const bool has_reference = files && files->contains(kReferenceNavFile);
+  const bool has_reference = bundle.contains(kReferenceNavFile);
   std::future<void> reading_reference = std::async(has_reference ? std::launch::async : std::launch::deferred, [&] {
     if (auto reference = open_into(reference_problems, kReferenceNavFile, false)) {
       guarded_into(reference_problems, kReferenceNavFile,

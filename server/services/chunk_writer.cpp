@@ -7,7 +7,9 @@ namespace bathyslam::server {
 ChunkWriter::ChunkWriter(Store store, std::size_t batch_bytes)
     : store_(std::move(store)), batch_bytes_(batch_bytes), thread_([this] { run(); }) {}
 
-ChunkWriter::~ChunkWriter() {
+ChunkWriter::~ChunkWriter() { store_the_rest(); }
+
+void ChunkWriter::store_the_rest() {
   {
     std::lock_guard lock(mutex_);
     ending_ = true;
@@ -26,12 +28,7 @@ void ChunkWriter::add(Chunk chunk) {
 }
 
 storage::UploadState ChunkWriter::finish(storage::UploadState before) {
-  {
-    std::lock_guard lock(mutex_);
-    ending_ = true;
-  }
-  changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  store_the_rest();
   if (refusal_) std::rethrow_exception(refusal_);
   return stored_any_ ? last_ : before;
 }

@@ -35,6 +35,7 @@ class ChunkWriter {
 
  private:
   void run();
+  void store_the_rest();  // and joins the thread
 
   Store store_;
   std::size_t batch_bytes_;

@@ -1,6 +1,5 @@
 #include "server/services/survey_service.h"
 
-
 #include "core/fuse/fuse.h"
 #include "core/fuse/map_extent.h"
 #include "core/fuse/map_resolution.h"
@@ -203,20 +202,13 @@ grpc::Status SurveyService::UploadFile(grpc::ServerContext* call, grpc::ServerRe
       auto append = [&](const v1::UploadFileRequest& message) {
         writer.add({message.offset(), storage::Bytes(message.data().begin(), message.data().end())});
       };
-      try {
-        if (!first.data().empty()) append(first);
-        v1::UploadFileRequest message;
-        while (reader->Read(&message)) {
-          check_continuation(first, message);
-          append(message);
-        }
-      } catch (...) {
-        // What arrived before a bad message is kept, as when each chunk was committed alone.
-        try {
-          writer.finish(state);
-        } catch (...) {
-        }
-        throw;
+      // A bad message ends the call; the writer still stores what arrived before it (its
+      // destructor), as when each chunk was committed alone.
+      if (!first.data().empty()) append(first);
+      v1::UploadFileRequest message;
+      while (reader->Read(&message)) {
+        check_continuation(first, message);
+        append(message);
       }
       state = writer.finish(state);
       describe_upload(state, reply);

@@ -52,14 +52,17 @@ BundleReadResult read_sonar_survey(const SurveyRecord& record, const std::filesy
 // A survey's complete uploaded bundle files, read from the database.
 class StoredBundle : public BundleSource {
  public:
-  StoredBundle(SurveyStore& store, std::int64_t survey_id) : store_(store), survey_id_(survey_id) {
-    for (const UploadState& upload : store.uploads(survey_id))
+  StoredBundle(SurveyStore& store, std::int64_t survey_id, const std::vector<UploadState>& uploads)
+      : store_(store), survey_id_(survey_id) {
+    for (const UploadState& upload : uploads)
       if (upload.complete && is_bundle_file(upload.name)) complete_.push_back(upload.name);
   }
   bool contains(std::string_view file) const override {
     return std::find(complete_.begin(), complete_.end(), file) != complete_.end();
   }
-  std::unique_ptr<ByteSource> open(std::string_view file) const override { return store_.open_file(survey_id_, std::string(file)); }
+  std::unique_ptr<ByteSource> open(std::string_view file) const override {
+    return store_.open_file(survey_id_, std::string(file));
+  }
   std::string name() const override { return "the upload"; }
 
  private:
@@ -68,17 +71,15 @@ class StoredBundle : public BundleSource {
   std::vector<std::string> complete_;
 };
 
-bool has_sonar_files(SurveyStore& store, std::int64_t survey_id) {
-  const std::vector<UploadState> uploads = store.uploads(survey_id);
-  return std::any_of(uploads.begin(), uploads.end(), [](const UploadState& upload) { return is_sonar_file_path(upload.name); });
-}
-
 }  // namespace
 
 BundleReadResult read_stored_survey(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root,
                                     PingSink& sink) {
-  if (has_sonar_files(store, survey_id)) return StoredSurveyCopy(store, survey_id, scratch_root).read(sink);
-  return stream_bundle(StoredBundle(store, survey_id), sink);
+  const std::vector<UploadState> uploads = store.uploads(survey_id);
+  const bool sonar_files =
+      std::any_of(uploads.begin(), uploads.end(), [](const UploadState& upload) { return is_sonar_file_path(upload.name); });
+  if (sonar_files) return StoredSurveyCopy(store, survey_id, scratch_root).read(sink);
+  return stream_bundle(StoredBundle(store, survey_id, uploads), sink);
 }
 
 StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)

@@ -1,7 +1,7 @@
 #pragma once
-// A survey's uploaded files read as a bundle: copied into a scratch folder (streamed chunk by
-// chunk, checksums verified) so that core's bundle reader parses them exactly as it parses a
-// bundle on disk, the copy removed when done.
+// A survey's uploaded files read as a bundle, by core's bundle reader as it reads one on disk:
+// straight from the database for a validation, or through a scratch copy (checksums verified,
+// removed when done) for a job, which reads them twice, and for sonar files.
 #include <cstdint>
 #include <filesystem>
 
@@ -15,9 +15,6 @@ namespace bathyslam::storage {
 // .gsf, .all or .xtf) with an optional reference_nav.csv; others are refused at upload.
 bool is_bundle_file(const std::string& name);
 
-// A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
-// that they can be read more than once: a job streams the pings into its submaps, then again
-// into the corrected GSF, never holding the soundings whole; a validation streams them once.
 // A survey's uploaded files read once, its pings handed to `sink`: a bundle straight from the
 // database (each file streamed chunk by chunk, its checksum verified at its end, the database's
 // reading beside the parsing), sonar files through a scratch copy, as their readers need files.
@@ -25,6 +22,9 @@ bool is_bundle_file(const std::string& name);
 BundleReadResult read_stored_survey(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root,
                                     PingSink& sink);
 
+// A survey's complete uploaded files copied into a scratch folder for as long as this lives, so
+// that they can be read more than once: a job streams the pings into its submaps, then again
+// into the corrected GSF, never holding the soundings whole.
 class StoredSurveyCopy {
  public:
   // Throws what the store throws (a transient database error may be retried).

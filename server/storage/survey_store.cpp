@@ -5,11 +5,11 @@
 
 #include <algorithm>
 #include <cstring>
-#include <type_traits>
 #include <fstream>
 #include <future>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 
 #include "core/io/file_bytes.h"
 #include "core/io/problem.h"
@@ -342,20 +342,8 @@ std::vector<StoredFile> SurveyStore::files(std::int64_t survey_id) {
 }
 
 Bytes SurveyStore::read_file(std::int64_t survey_id, const std::string& name) {
-  auto connection = pool_.acquire();
-  Result file = connection->exec(
-      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
-      {survey_id, name});
-  if (file.rows() == 0)
-    throw std::out_of_range("survey " + std::to_string(survey_id) + " has no file '" + name + "'");
-  Bytes content;
-  content.reserve(static_cast<std::size_t>(file.int64(0, "size_bytes")));
-  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name,
-                 [&](std::span<const std::uint8_t> data) { content.insert(content.end(), data.begin(), data.end()); });
-  if (static_cast<std::int64_t>(content.size()) != file.int64(0, "size_bytes") ||
-      digest_bytes(sha256(content)) != file.bytes(0, "sha256"))
-    throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
-  return content;
+  const std::string content = read_all(*open_file(survey_id, name));
+  return Bytes(content.begin(), content.end());
 }
 
 namespace {
@@ -690,23 +678,14 @@ std::vector<UploadState> SurveyStore::uploads(std::int64_t survey_id) {
 }
 
 void SurveyStore::export_file(std::int64_t survey_id, const std::string& name, const std::filesystem::path& to) {
-  auto connection = pool_.acquire();
-  Result file = connection->exec(
-      "SELECT id, size_bytes, sha256, chunk_count FROM survey_files WHERE survey_id = $1 AND name = $2 AND complete",
-      {survey_id, name});
-  if (file.rows() == 0) throw std::out_of_range("survey " + std::to_string(survey_id) + " has no complete file '" + name + "'");
-  Sha256Stream digest;
-  std::int64_t size = 0;
+  const std::unique_ptr<ByteSource> in = open_file(survey_id, name);
   std::ofstream out(to, std::ios::binary);
-  for_each_chunk(*connection, file.int64(0, "id"), file.int64(0, "chunk_count"), name, [&](std::span<const std::uint8_t> data) {
-    digest.add(data);
-    size += static_cast<std::int64_t>(data.size());
-    out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
+  std::vector<char> buffer(1 << 20);
+  while (const std::size_t n = in->read(buffer.data(), buffer.size())) {
+    out.write(buffer.data(), static_cast<std::streamsize>(n));
     if (!out) close_checked(out, to);  // at once, while errno still says why
-  });
+  }
   close_checked(out, to);
-  if (size != file.int64(0, "size_bytes") || digest.finish() != to_sha256(file.bytes(0, "sha256")))
-    throw std::runtime_error("survey file '" + name + "' does not match the size and SHA-256 recorded at upload");
 }
 
 std::unique_ptr<ByteSource> SurveyStore::open_file(std::int64_t survey_id, const std::string& name) {

@@ -365,6 +365,7 @@ TEST(SurveyStore, AFileReadStraightFromTheDatabaseIsCheckedAtItsEnd) {
   EXPECT_EQ(read_all_of(1000), std::string(nav.begin(), nav.end()));
   EXPECT_THROW(store.open_file(survey, "pings.csv"), std::out_of_range);
 
+  // One chunk's five bytes overwritten in the database: the stream must not end as if whole.
   db.scalar("WITH c AS (UPDATE survey_file_chunks SET data = 'XXXXX' WHERE seq = 12 RETURNING 1) SELECT count(*) FROM c");
   EXPECT_THROW(read_all_of(1000), std::runtime_error);
 }
