@@ -105,7 +105,7 @@ storage::Report report_with_plots(const PipelineResult& result, const std::files
 // Writes an optional product with `write`: nullopt when written, else why not, in words for the
 // user (the scratch folder `dir` left out of them). A survey the product cannot hold (a ping of
 // more beams than GSF's 2-byte field) must not take the job's map down with it. A disk fault is
-// no such reason (WriteError: the job is given back), nor is a cancel.
+// no such reason (WriteError: the job is given back), nor is a database outage or a cancel.
 std::optional<std::string> optional_product(const std::filesystem::path& dir, const std::function<void()>& write) {
   try {
     write();
@@ -114,6 +114,8 @@ std::optional<std::string> optional_product(const std::filesystem::path& dir, co
     throw;
   } catch (const Cancelled&) {
     throw;
+  } catch (const storage::DatabaseError&) {
+    throw;  // the survey read again while the database is away: the job's to retry, not a product's failure
   } catch (const std::exception& error) {
     return without_folder(error.what(), dir);
   }
@@ -291,14 +293,13 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     // Its surveys: one, or several of one site joined in one graph (the first is the datum).
     std::vector<std::int64_t> survey_ids = {job.survey_id};
     survey_ids.insert(survey_ids.end(), job.more_survey_ids.begin(), job.more_survey_ids.end());
-    std::vector<std::optional<storage::StoredSurveyCopy>> files(survey_ids.size());
+    std::vector<std::optional<storage::StoredSurvey>> files(survey_ids.size());
     std::vector<SurveyReader> reads;
     std::vector<std::string> names;
     for (std::size_t k = 0; k < survey_ids.size(); ++k) {
       names.push_back("survey " + std::to_string(survey_ids[k]));
       reads.push_back([&, k](PingSink& sink) {
-        retry_transient(name + ": loading " + names[k], options_.retry, cancel,
-                        [&] { files[k].emplace(surveys_, survey_ids[k], options_.scratch); });
+        if (!files[k]) files[k].emplace(surveys_, survey_ids[k], options_.scratch);
         BundleReadResult bundle = files[k]->read(sink);
         if (!bundle.survey) throw BundleError(std::move(bundle.problems));
         return std::move(*bundle.survey);
@@ -308,10 +309,16 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     // checked here.
     const FuseConfig fuse{.resolution_m = 0, .max_cells = options_.max_map_cells};
     std::vector<Survey> site;
-    JobInput input = survey_ids.size() == 1 ? read_job_input(reads.front(), config, fuse)
-                                            : read_site_input(reads, names, config, fuse, site);
-    // The surveys are read again for their corrected GSF, one at a time: the later ones' copies
-    // go now (a site's copies together could fill the scratch disk) and are made again then.
+    // A bundle streams from the database: an outage while it is read starts the reading again
+    // (the pings went into submaps that cannot be taken back), and costs a retry, not the attempt.
+    JobInput input = retry_transient(name + ": loading its surveys", options_.retry, cancel, [&] {
+      site.clear();
+      return survey_ids.size() == 1 ? read_job_input(reads.front(), config, fuse)
+                                    : read_site_input(reads, names, config, fuse, site);
+    });
+    // The surveys are read again for their corrected GSF, one at a time: the later ones' scratch
+    // copies of sonar files go now (a site's together could fill the scratch disk) and are made
+    // again then.
     for (std::size_t k = 1; k < files.size(); ++k) files[k].reset();
     const Survey& survey = input.survey;
     event("load", 1, std::to_string(input.pings) + " pings");
@@ -347,12 +354,14 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     for (std::size_t k = 0; k < survey_ids.size() && input.pings > 0; ++k) {
       throw_if_cancelled(&cancel);
       const std::filesystem::path path = gsf_dir.path() / corrected_gsf_name(static_cast<int>(k) + 1);
-      if (!files[k])  // a database outage here is the job's to retry, not a missing product
-        retry_transient(name + ": loading " + names[k], options_.retry, cancel,
-                        [&] { files[k].emplace(surveys_, survey_ids[k], options_.scratch); });
+      // A database outage while the survey is read again is the job's to retry, not a failed
+      // product: the file is written again from its start.
       if (auto failure = optional_product(gsf_dir.path(), [&] {
-            write_corrected_gsf(k == 0 ? survey : site[k], result, path, [&](PingSink& sink) { return files[k]->read(sink); },
-                                static_cast<int>(k));
+            retry_transient(name + ": writing " + path.filename().string(), options_.retry, cancel, [&] {
+              if (!files[k]) files[k].emplace(surveys_, survey_ids[k], options_.scratch);
+              write_corrected_gsf(k == 0 ? survey : site[k], result, path,
+                                  [&](PingSink& sink) { return files[k]->read(sink); }, static_cast<int>(k));
+            });
           })) {
         const std::string product = path.filename().string();
         log("job %lld: %s not written: %s", id, product.c_str(), failure->c_str());

@@ -252,7 +252,7 @@ grpc::Status SurveyService::FinalizeSurvey(grpc::ServerContext* call, const v1::
     }
     // Read as a job reads it, the pings streamed: only their outlines are kept, never the soundings.
     PingOutlines outlines;
-    BundleReadResult bundle = storage::read_stored_survey(context_.surveys, survey.id, scratch_, outlines);
+    BundleReadResult bundle = storage::StoredSurvey(context_.surveys, survey.id, scratch_).read(outlines);
     for (const Problem& problem : bundle.problems) {
       problems.push_back(to_json(problem));
       errors = errors || problem.severity == Problem::Severity::kError;

@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <array>
+#include <memory>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 
 namespace bathyslam::storage {
@@ -49,64 +52,64 @@ BundleReadResult read_sonar_survey(const SurveyRecord& record, const std::filesy
   return result;
 }
 
+// A stored file opened when first read: core's bundle reader takes an error while opening for a
+// problem of the bundle, and a database outage there is none (the job is given back to the queue,
+// the finalize answered UNAVAILABLE); errors while reading reach the reader's caller as they are.
+class OpenedWhenRead : public ByteSource {
+ public:
+  OpenedWhenRead(SurveyStore& store, std::int64_t survey_id, std::string name)
+      : store_(store), survey_id_(survey_id), name_(std::move(name)) {}
+  std::size_t read(char* buffer, std::size_t size) override {
+    if (!file_) file_ = store_.open_file(survey_id_, name_);
+    return file_->read(buffer, size);
+  }
+
+ private:
+  SurveyStore& store_;
+  std::int64_t survey_id_;
+  std::string name_;
+  std::unique_ptr<ByteSource> file_;
+};
+
 // A survey's complete uploaded bundle files, read from the database.
 class StoredBundle : public BundleSource {
  public:
-  StoredBundle(SurveyStore& store, std::int64_t survey_id, const std::vector<UploadState>& uploads)
-      : store_(store), survey_id_(survey_id) {
-    for (const UploadState& upload : uploads)
-      if (upload.complete && is_bundle_file(upload.name)) complete_.push_back(upload.name);
-  }
+  StoredBundle(SurveyStore& store, std::int64_t survey_id, const std::vector<std::string>& complete)
+      : store_(store), survey_id_(survey_id), complete_(complete) {}
   bool contains(std::string_view file) const override {
     return std::find(complete_.begin(), complete_.end(), file) != complete_.end();
   }
   std::unique_ptr<ByteSource> open(std::string_view file) const override {
-    return store_.open_file(survey_id_, std::string(file));
+    return std::make_unique<OpenedWhenRead>(store_, survey_id_, std::string(file));
   }
   std::string name() const override { return "the upload"; }
 
  private:
   SurveyStore& store_;
   std::int64_t survey_id_;
-  std::vector<std::string> complete_;
+  const std::vector<std::string>& complete_;
 };
 
 }  // namespace
 
-BundleReadResult read_stored_survey(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root,
-                                    PingSink& sink) {
+StoredSurvey::StoredSurvey(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)
+    : store_(store), survey_id_(survey_id) {
   const std::vector<UploadState> uploads = store.uploads(survey_id);
+  for (const UploadState& upload : uploads)
+    if (upload.complete && is_bundle_file(upload.name)) bundle_files_.push_back(upload.name);
   const bool sonar_files =
       std::any_of(uploads.begin(), uploads.end(), [](const UploadState& upload) { return is_sonar_file_path(upload.name); });
-  if (sonar_files) return StoredSurveyCopy(store, survey_id, scratch_root).read(sink);
-  return stream_bundle(StoredBundle(store, survey_id, uploads), sink);
+  if (!sonar_files) return;
+  std::optional<SurveyRecord> record = store.survey(survey_id);
+  if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");
+  record_ = std::move(*record);
+  copy_.emplace(scratch_root, "bundle");
+  for (const std::string& name : bundle_files_) store.export_file(survey_id, name, copy_->path() / name);
 }
 
-StoredSurveyCopy::StoredSurveyCopy(SurveyStore& store, std::int64_t survey_id, const std::filesystem::path& scratch_root)
-    : scratch_(scratch_root, "bundle") {
-  for (const UploadState& upload : store.uploads(survey_id)) {
-    sonar_files_ = sonar_files_ || is_sonar_file_path(upload.name);
-    if (!upload.complete || !is_bundle_file(upload.name)) continue;
-    store.export_file(survey_id, upload.name, scratch_.path() / upload.name);
-  }
-  if (sonar_files_) {
-    std::optional<SurveyRecord> record = store.survey(survey_id);
-    if (!record) throw std::runtime_error("survey " + std::to_string(survey_id) + " does not exist");
-    record_ = std::move(*record);
-  }
-}
-
-BundleReadResult StoredSurveyCopy::read(PingSink& sink) const {
-  if (sonar_files_) return read_sonar_survey(record_, scratch_.path(), sink);
-  return named_as_upload(stream_bundle(scratch_.path(), sink));
-}
-
-// The reader names the folder of a missing file; the scratch folder means nothing to a user.
-BundleReadResult StoredSurveyCopy::named_as_upload(BundleReadResult result) const {
-  const std::string where = " from " + scratch_.path().string();
-  for (Problem& problem : result.problems)
-    if (auto at = problem.message.find(where); at != std::string::npos) problem.message.replace(at, where.size(), " from the upload");
-  return result;
+BundleReadResult StoredSurvey::read(PingSink& sink) const {
+  if (copy_) return read_sonar_survey(record_, copy_->path(), sink);
+  return stream_bundle(StoredBundle(store_, survey_id_, bundle_files_), sink);
 }
 
 }  // namespace bathyslam::storage

@@ -185,9 +185,11 @@ TEST(Scheduler, AJobCancelledAfterItsLastStoreStepKeepsNothing) {
   EXPECT_EQ(stored_rows(f.db, job), 0);
 }
 
-// Issue 37 fault 2: a job whose scratch copy the disk refuses is the server's trouble, not a
+// Issue 37 fault 2: a job whose scratch files the disk refuses is the server's trouble, not a
 // verdict on its survey: given back to the queue (the attempt counts), and failed only once its
-// attempts are used up, saying it was the disk. Files over 1000 bytes stand for a full disk.
+// attempts are used up, saying it was the disk. Files over 1000 bytes stand for a full disk; the
+// bundle is read straight from the database, so the first file refused is the map's GeoTIFF,
+// whose refusal GDAL says only in words.
 TEST(Scheduler, AJobWhoseScratchDiskRefusesAWriteIsGivenBackNotFailedForItsInput) {
   SchedulerFixture f;
   const std::int64_t survey = f.stored_survey(f.scratch / "bundle");
