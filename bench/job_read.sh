@@ -14,7 +14,7 @@ servers=("$build/server/bathyslam-server")
 [ -z "$other" ] || servers+=("$(realpath "$other")")
 
 start_private_server --workers 1 --dev-tenant bench
-"$build/client/bathyslam" upload "$bundle" --name job-read > "$work/upload.out"
+"$build/client/bathyslam" upload "$bundle" --name job-read > "$work/upload.out" 2> "$work/upload.err"
 survey=$(awk '/^survey .* ready$/ {print $2}' "$work/upload.out")
 stop_server() { kill "$server_pid"; wait "$server_pid" 2> /dev/null || true; server_pid=""; }
 stop_server
@@ -34,8 +34,8 @@ for run in $(seq "$runs"); do
     for _ in $(seq 100); do grep -q "listening" "$work/server.out" && break; sleep 0.1; done
     BATHYSLAM_SERVER=$(sed -n 's/.*listening on //p' "$work/server.out")
     export BATHYSLAM_SERVER
-    job=$("$build/client/bathyslam" submit "$survey" --config "$config")
-    "$build/client/bathyslam" watch "$job" > /dev/null
+    job=$("$build/client/bathyslam" submit "$survey" --config "$config" | awk '/^job/ {print $2}')
+    "$build/client/bathyslam" watch "$job" > /dev/null 2>&1
     rss=$(awk '/VmHWM/ {print $2 / 1024}' "/proc/$server_pid/status")
     stop_server
     echo "run $run $(basename "$server"): job $job load $(between "$job" load 0 load 1) s," \

@@ -37,11 +37,13 @@ Sha256 to_sha256(const Bytes& bytes) {
 
 // A file's chunks in order from the database, eight a query, the next eight fetched while the
 // caller takes these (the database's reading and decompressing beside the caller's work;
-// memory: sixteen chunks).
+// memory: sixteen chunks). With a `digest`, each query's chunks are added to it on the fetching
+// thread, in order: a query starts only once the caller has taken the one before.
 class ChunkStream {
  public:
-  ChunkStream(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, std::string name)
-      : connection_(connection), file_id_(file_id), chunk_count_(chunk_count), name_(std::move(name)) {
+  ChunkStream(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, std::string name,
+              Sha256Stream* digest = nullptr)
+      : connection_(connection), file_id_(file_id), chunk_count_(chunk_count), name_(std::move(name)), digest_(digest) {
     fetch_from(0);
   }
   ChunkStream(const ChunkStream&) = delete;
@@ -72,15 +74,22 @@ class ChunkStream {
     if (first >= chunk_count_) return;
     asked_ = first;
     coming_ = std::async(std::launch::async, [this, first] {
-      return connection_.exec_binary(
+      Result rows = connection_.exec_binary(
           "SELECT data FROM survey_file_chunks WHERE file_id = $1 AND seq >= $2 AND seq < $3 ORDER BY seq",
           {file_id_, first, std::min(chunk_count_, first + kChunksPerQuery)});
+      if (digest_)
+        for (int row = 0; row < rows.rows(); ++row) {
+          const std::string_view cell = rows.text(row, 0);
+          digest_->add({reinterpret_cast<const std::uint8_t*>(cell.data()), cell.size()});
+        }
+      return rows;
     });
   }
 
   Connection& connection_;
   std::int64_t file_id_, chunk_count_;
   std::string name_;
+  Sha256Stream* digest_;
   std::optional<Result> rows_;
   int row_ = 0;
   std::int64_t asked_ = 0;       // the first chunk of the query coming
@@ -95,7 +104,8 @@ void for_each_chunk(Connection& connection, std::int64_t file_id, std::int64_t c
   for (auto chunk = chunks.next(); !chunk.empty(); chunk = chunks.next()) sink(chunk);
 }
 
-// A complete file read from the database as a ByteSource, its size and SHA-256 checked at the end.
+// A complete file read from the database as a ByteSource, its size and SHA-256 checked at the end
+// (hashed beside the caller's parsing, by the chunks' fetching thread).
 class StoredFileSource : public ByteSource {
  public:
   StoredFileSource(PooledConnection connection, std::int64_t file_id, std::int64_t chunk_count, std::int64_t size,
@@ -104,7 +114,7 @@ class StoredFileSource : public ByteSource {
         size_(size),
         sha256_(sha256),
         name_(name),
-        chunks_(std::make_unique<ChunkStream>(*connection_, file_id, chunk_count, std::move(name))) {}
+        chunks_(std::make_unique<ChunkStream>(*connection_, file_id, chunk_count, std::move(name), &digest_)) {}
 
   std::size_t read(char* buffer, std::size_t size) override {
     std::size_t n = 0;
@@ -115,7 +125,6 @@ class StoredFileSource : public ByteSource {
           end();
           break;
         }
-        digest_.add(left_);
         read_ += static_cast<std::int64_t>(left_.size());
       }
       const std::size_t take = std::min(size - n, left_.size());
@@ -137,9 +146,9 @@ class StoredFileSource : public ByteSource {
   std::int64_t size_;
   Sha256 sha256_;
   std::string name_;
+  Sha256Stream digest_;                  // before the chunks: they add to it until they go
   std::unique_ptr<ChunkStream> chunks_;  // after the connection: goes first
   std::span<const std::uint8_t> left_;
-  Sha256Stream digest_;
   std::int64_t read_ = 0;
   bool ended_ = false;
 };
