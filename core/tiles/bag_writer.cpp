@@ -50,9 +50,7 @@ void write_bag(const GridRaster& raster, std::string_view crs, const BagMetadata
   options.SetNameValue("VAR_PROCESS_STEP_DESCRIPTION", metadata.process_step.c_str());
   options.SetNameValue("VAR_VERTICAL_UNCERT_CODE", "rawStdDev");
   options.SetNameValue("COMPRESS", "DEFLATE");
-  CPLErrorReset();
-  GdalDatasetPtr bag(gdal_driver("BAG")->CreateCopy(path.c_str(), mem.get(), FALSE, options.List(), nullptr, nullptr));
-  if (!bag) throw gdal_error(what, "BAG driver");
+  copy_to_file("BAG", path, *mem, options.List(), what);
 }
 
 }  // namespace bathyslam

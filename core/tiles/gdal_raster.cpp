@@ -1,10 +1,13 @@
 #include "core/tiles/gdal_raster.h"
 
 #include <array>
+#include <cerrno>
 #include <mutex>
 
 #include <cpl_error.h>
 #include <ogr_spatialref.h>
+
+#include "core/io/file_bytes.h"
 
 namespace bathyslam {
 
@@ -18,6 +21,51 @@ GDALDriver* gdal_driver(const char* name) {
 
 std::runtime_error gdal_error(const std::string& what, const std::string& why) {
   return std::runtime_error(what + ": " + why + " (" + CPLGetLastErrorMsg() + ")");
+}
+
+namespace {
+
+bool disk_full(int error_number) { return error_number == ENOSPC || error_number == EDQUOT || error_number == EFBIG; }
+
+// GDAL's errors while it writes one file, on this thread: the first that came right after a write
+// the disk refused (its errno, read before anything else can change it), each passed on to GDAL's
+// default handler as before. errno after the whole copy is not enough: a refused write is often
+// followed by failing reads of the half-written file, which leave errno of their own.
+class DiskFullWatch {
+ public:
+  DiskFullWatch() { CPLPushErrorHandlerEx(&DiskFullWatch::handle, this); }
+  ~DiskFullWatch() { CPLPopErrorHandler(); }
+  DiskFullWatch(const DiskFullWatch&) = delete;
+  DiskFullWatch& operator=(const DiskFullWatch&) = delete;
+  int error_number() const { return error_number_; }
+
+ private:
+  static void CPL_STDCALL handle(CPLErr level, CPLErrorNum number, const char* message) {
+    const int now = errno;
+    auto* self = static_cast<DiskFullWatch*>(CPLGetErrorHandlerUserData());
+    if (level >= CE_Failure && self->error_number_ == 0 && disk_full(now)) self->error_number_ = now;
+    CPLDefaultErrorHandler(level, number, message);
+  }
+  int error_number_ = 0;
+};
+
+}  // namespace
+
+GdalDatasetPtr copy_to_file(const char* driver, const std::filesystem::path& path, GDALDataset& source,
+                            char** options, const std::string& what) {
+  CPLErrorReset();
+  GdalDatasetPtr copy;
+  int refused = 0;
+  {
+    const DiskFullWatch watch;
+    errno = 0;
+    copy.reset(gdal_driver(driver)->CreateCopy(path.c_str(), &source, FALSE, options, nullptr, nullptr));
+    refused = watch.error_number();
+    if (!copy && refused == 0 && disk_full(errno)) refused = errno;
+  }
+  if (!copy && refused != 0) throw WriteError(path, refused);
+  if (!copy) throw gdal_error(what, std::string(driver) + " driver");
+  return copy;
 }
 
 GdalDatasetPtr memory_raster(const GridGeometry& g, std::string_view crs, std::span<const NamedBand> bands,

@@ -32,4 +32,10 @@ GdalDatasetPtr memory_raster(const GridGeometry& geometry, std::string_view crs,
 // std::runtime_error "<what>: <why> (<GDAL's last error>)".
 std::runtime_error gdal_error(const std::string& what, const std::string& why);
 
+// `source` copied to `path` by the driver called `driver` with `options`. GDAL says a refused
+// write in words only; the errno its refused write left says whether the disk was full, which is
+// the machine's shortage (WriteError: a job is given back), not a fault of the map (gdal_error).
+GdalDatasetPtr copy_to_file(const char* driver, const std::filesystem::path& path, GDALDataset& source,
+                            char** options, const std::string& what);
+
 }  // namespace bathyslam

@@ -1,10 +1,8 @@
 #include "core/tiles/geotiff_writer.h"
 
-#include "core/io/file_bytes.h"
 #include "core/tiles/gdal_raster.h"
 
 #include <array>
-#include <cerrno>
 #include <cmath>
 #include <string>
 
@@ -36,13 +34,7 @@ void write_geotiff(const GridGeometry& geometry, std::span<const NamedBand> band
   options.SetNameValue("OVERVIEW_COMPRESS", "ZSTD");
   options.SetNameValue("OVERVIEW_PREDICTOR", "FLOATING_POINT");
   options.SetNameValue("OVERVIEW_RESAMPLING", "AVERAGE");  // NoData-aware, like the tile pyramid
-  CPLErrorReset();
-  errno = 0;
-  GdalDatasetPtr cog(gdal_driver("COG")->CreateCopy(path.c_str(), mem.get(), FALSE, options.List(), nullptr, nullptr));
-  // GDAL says a refused write in words only; the errno its write left says whether the disk was
-  // full, which is the machine's shortage (the job given back), not a fault of the map.
-  if (!cog && (errno == ENOSPC || errno == EDQUOT || errno == EFBIG)) throw WriteError(path, errno);
-  if (!cog) throw gdal_error(what(path), "COG driver");
+  copy_to_file("COG", path, *mem, options.List(), what(path));
 }
 
 }  // namespace bathyslam

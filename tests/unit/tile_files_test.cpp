@@ -6,6 +6,9 @@
 #include <filesystem>
 #include <string>
 
+#include <csignal>
+#include <functional>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <gdal_priv.h>
@@ -13,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <openvdb/openvdb.h>
 
+#include "core/io/file_bytes.h"
 #include "core/tiles/bag_writer.h"
 #include "core/tiles/geotiff_writer.h"
 #include "core/tiles/quicklook.h"
@@ -182,6 +186,40 @@ TEST_F(TileFiles, GeoTiffWriteFailureNamesThePath) {
     FAIL() << "wrote into a folder that does not exist";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+}
+
+// A GeoTIFF the disk refuses (a full scratch disk on the server) is a WriteError, so that a job is
+// given back instead of failed for its map; GDAL says it only in words. Files over 1000 bytes
+// stand for a full disk. A folder that does not exist stays an ordinary error.
+TEST_F(TileFiles, AGeoTiffTheDiskRefusesIsAWriteError) {
+  rlimit unlimited{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &unlimited), 0);
+  signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead of ending the process
+  const rlimit small{1000, unlimited.rlim_max};
+  auto refused = [&](const std::function<void()>& write) -> std::string {
+    EXPECT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+    std::string said = "written";
+    try {
+      write();
+    } catch (const WriteError& e) {
+      said = e.out_of_space() ? "out of space" : e.what();
+    } catch (const std::exception& e) {
+      said = e.what();
+    }
+    EXPECT_EQ(setrlimit(RLIMIT_FSIZE, &unlimited), 0);
+    return said;
+  };
+  EXPECT_EQ(refused([&] { write_geotiff(sample_map(), "EPSG:32651", dir_ / "map.tif"); }), "out of space");
+  // The BAG goes through the same copy_to_file and was seen refused as "out of space" too, but
+  // GDAL 3.6's BAG driver leaves the half-made HDF5 file open, and HDF5 crashes closing it at the
+  // process's exit (H5F__close_cb): not something a test process can be left with.
+  try {
+    write_geotiff(sample_map(), "EPSG:32651", dir_ / "no" / "map.tif");
+    FAIL() << "wrote into a folder that does not exist";
+  } catch (const WriteError& e) {
+    FAIL() << "a missing folder taken for a full disk: " << e.what();
+  } catch (const std::runtime_error&) {
   }
 }
 
