@@ -294,13 +294,16 @@ void Scheduler::run(const storage::ClaimedJob& job) {
     std::vector<std::int64_t> survey_ids = {job.survey_id};
     survey_ids.insert(survey_ids.end(), job.more_survey_ids.begin(), job.more_survey_ids.end());
     std::vector<std::optional<storage::StoredSurvey>> files(survey_ids.size());
+    auto stored = [&](std::size_t k) -> const storage::StoredSurvey& {
+      if (!files[k]) files[k].emplace(surveys_, survey_ids[k], options_.scratch);
+      return *files[k];
+    };
     std::vector<SurveyReader> reads;
     std::vector<std::string> names;
     for (std::size_t k = 0; k < survey_ids.size(); ++k) {
       names.push_back("survey " + std::to_string(survey_ids[k]));
       reads.push_back([&, k](PingSink& sink) {
-        if (!files[k]) files[k].emplace(surveys_, survey_ids[k], options_.scratch);
-        BundleReadResult bundle = files[k]->read(sink);
+        BundleReadResult bundle = stored(k).read(sink);
         if (!bundle.survey) throw BundleError(std::move(bundle.problems));
         return std::move(*bundle.survey);
       });
@@ -358,9 +361,8 @@ void Scheduler::run(const storage::ClaimedJob& job) {
       // product: the file is written again from its start.
       if (auto failure = optional_product(gsf_dir.path(), [&] {
             retry_transient(name + ": writing " + path.filename().string(), options_.retry, cancel, [&] {
-              if (!files[k]) files[k].emplace(surveys_, survey_ids[k], options_.scratch);
               write_corrected_gsf(k == 0 ? survey : site[k], result, path,
-                                  [&](PingSink& sink) { return files[k]->read(sink); }, static_cast<int>(k));
+                                  [&](PingSink& sink) { return stored(k).read(sink); }, static_cast<int>(k));
             });
           })) {
         const std::string product = path.filename().string();

@@ -96,12 +96,13 @@ class ChunkStream {
   std::future<Result> coming_;  // last: waited for before the rest goes
 };
 
-// Reads a file's chunks in order into `sink`.
-template <typename Sink>
-void for_each_chunk(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, const std::string& name,
-                    Sink&& sink) {
-  ChunkStream chunks(connection, file_id, chunk_count, name);
-  for (auto chunk = chunks.next(); !chunk.empty(); chunk = chunks.next()) sink(chunk);
+// The SHA-256 of a file's stored chunks, hashed as they are fetched.
+Sha256 stored_sha256(Connection& connection, std::int64_t file_id, std::int64_t chunk_count, const std::string& name) {
+  Sha256Stream digest;
+  ChunkStream chunks(connection, file_id, chunk_count, name, &digest);
+  while (!chunks.next().empty()) {
+  }
+  return digest.finish();
 }
 
 // A complete file read from the database as a ByteSource, its size and SHA-256 checked at the end
@@ -650,11 +651,8 @@ UploadState SurveyStore::append_chunks(std::int64_t survey_id, const std::string
   if (accepted == 0 && refused) throw *refused;  // nothing changed: the transaction rolls back
   if (!rows.empty()) connection->copy_in("COPY survey_file_chunks (file_id, seq, data) FROM STDIN (FORMAT binary)", rows.bytes());
   if (now.complete) {
-    const Sha256 received = from_start ? from_start->finish() : [&] {
-      Sha256Stream digest;
-      for_each_chunk(*connection, file.file_id, now.chunks, name, [&](std::span<const std::uint8_t> bytes) { digest.add(bytes); });
-      return digest.finish();
-    }();
+    const Sha256 received =
+        from_start ? from_start->finish() : stored_sha256(*connection, file.file_id, now.chunks, name);
     if (received != to_sha256(file.sha256)) {
       // Discarded and committed before throwing, so that a retry starts from zero.
       connection->exec("DELETE FROM survey_file_chunks WHERE file_id = $1", {file.file_id});
