@@ -1,6 +1,7 @@
 #pragma once
 // graph: the pose graph over submap poses, solved with Ceres (as Ceres' pose_graph_3d example).
 #include <map>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -137,5 +138,15 @@ Eigen::Matrix<double, 6, 1> whitened_residual(const PoseGraphEdge& edge, const E
 GraphSolution optimize_pose_graph(const std::vector<Eigen::Isometry3d>& initial,
                                   const std::vector<PoseGraphEdge>& edges, const GraphConfig& config = {},
                                   int first_free = 1);
+
+// How well the graph `edges` at `poses` (node 0 held) fixes where node `to` lies in node `from`'s
+// level frame: the first-order covariance of x, y (m) and yaw (rad) there, the parametrisation of
+// DrNoiseModel (dr_noise.h), one matrix per pair of `pairs`. Dead reckoning's covariance is that of
+// the odometry alone; every registration the graph holds can only shrink it. nullopt when the
+// graph does not determine it (a node in no edge, or Ceres finds the graph rank-deficient).
+std::optional<std::vector<Eigen::Matrix3d>> relative_covariances(const std::vector<Eigen::Isometry3d>& poses,
+                                                                  const std::vector<PoseGraphEdge>& edges,
+                                                                  const GraphConfig& config,
+                                                                  const std::vector<std::pair<int, int>>& pairs);
 
 }  // namespace bathyslam

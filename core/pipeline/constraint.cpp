@@ -33,6 +33,7 @@ std::string to_string(AliasResolution resolution) {
     case AliasResolution::kNone: return "none";
     case AliasResolution::kRuledOut: return "ruled out by dead reckoning";
     case AliasResolution::kInformationRemoved: return "information along it removed";
+    case AliasResolution::kJudgedByGraph: return "judged by the graph";
   }
   return "?";
 }

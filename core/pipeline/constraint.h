@@ -25,8 +25,9 @@ ConstraintType parse_constraint_type(const std::string& text);  // throws std::i
 
 // What the DR prior said of the uniqueness probe's alternative alignment (robust_backend.h,
 // resolve_alias): nothing to say (the answer is unique, or the rule is off), dead reckoning
-// rules it out, or it does not and the information along it was removed.
-enum class AliasResolution { kNone, kRuledOut, kInformationRemoved };
+// rules it out, or it does not and the information along it was removed; or it does not and the
+// graph of the registrations kept before it judged them instead (robustness.alias_from_graph).
+enum class AliasResolution { kNone, kRuledOut, kInformationRemoved, kJudgedByGraph };
 std::string to_string(AliasResolution resolution);
 
 struct Constraint {
@@ -60,6 +61,9 @@ struct Constraint {
   Eigen::Matrix2d horizontal_spread = Eigen::Matrix2d::Zero();
   AliasResolution alias = AliasResolution::kNone;
   double alias_mahalanobis2 = -1;  // the nearest competitor's DR statistic; negative: not tested
+  // The information the graph kept before it left the registration where dead reckoning left
+  // its competitors open (robustness.alias_from_graph): it stands when DR's noise model changes.
+  std::optional<Information6> graph_information;
   // The DR-plausible competitors' RMS distance from the answer along and across their main line.
   Eigen::Vector2d alias_spread_m = Eigen::Vector2d::Zero();
   Rejection rejection;           // by the registration tests or the DR gate

@@ -187,6 +187,56 @@ const RegisteredBatch* taken_up(const RegistrationCheckpoints* checkpoints, int 
   return nullptr;
 }
 
+// Where dead reckoning leaves a registration's competitors open, the graph kept so far may not
+// (robustness.alias_from_graph). Each registration from `batch_first` on that dead reckoning left
+// so is judged again against where that graph puts its two submaps (graph_alias_gate: the batch's
+// estimate, the graph's covariance of the pair); where the verdict keeps more, PCM selects again
+// and the graph is solved with it (not before `first_free`), and the rest are judged again, at
+// most alias_graph_rounds times: on a lawnmower the pairs next to one that now holds are a
+// submap's odometry away from it, where the pairs beyond the turn were a whole line's.
+void judge_aliases_by_graph(Registrations& r, std::size_t batch_first, int end, int first_free,
+                            std::vector<Eigen::Isometry3d>& estimate, const DrNoiseModel& dr, const DrNoiseModel& alias_dr,
+                            const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan,
+                            KnownConflicts* known) {
+  std::vector<std::size_t> open;
+  for (std::size_t k = batch_first; k < r.constraints.size(); ++k) {
+    const Constraint& c = r.constraints[k];
+    // Adjacent pairs only: a loop spans a long chain whose covariance in the graph rests on the
+    // survey's noise estimate (at its lower bound on sand waves), and on the `small` matrix loops
+    // judged so were kept 2-7 m off within sigmas under 2 m (docs/slam-every-seabed.md).
+    if (c.type == ConstraintType::kAdjacent && c.in_graph() && c.alias == AliasResolution::kInformationRemoved &&
+        c.uniqueness.probed)
+      open.push_back(k);
+  }
+  for (int round = 0; round < config.robustness.alias_graph_rounds && !open.empty(); ++round) {
+    std::vector<PoseGraphEdge> edges;
+    for (const Constraint& c : r.constraints) {
+      if (c.in_graph() && c.from < end && c.to < end) edges.push_back(graph_edge(c));
+    }
+    std::vector<std::pair<int, int>> pairs;
+    for (std::size_t k : open) pairs.emplace_back(r.constraints[k].from, r.constraints[k].to);
+    const auto covariances = relative_covariances(estimate, edges, r.navigation_noise.graph, pairs);
+    if (!covariances) break;
+    std::vector<std::size_t> still_open;
+    int first_gained = std::numeric_limits<int>::max();
+    for (std::size_t i = 0; i < open.size(); ++i) {
+      Constraint& c = r.constraints[open[i]];
+      const Information6 before = c.information;
+      const AliasGate gate = graph_alias_gate(c, estimate, (*covariances)[i].topLeftCorner<2, 2>());
+      judge_with_prior(c, dr, alias_dr, dr_poses, config, plan, &gate);
+      if (c.in_graph() && (c.information - before).topLeftCorner<2, 2>().squaredNorm() > 0) {
+        first_gained = std::min({first_gained, c.from, c.to});
+      } else if (c.in_graph()) {
+        still_open.push_back(open[i]);
+      }
+    }
+    open = std::move(still_open);
+    if (first_gained == std::numeric_limits<int>::max()) break;
+    if (plan.consistency) select_consistent_registrations(r.constraints, dr, dr_poses, config.robustness.pcm, known);
+    estimate = solve(estimate, r.constraints, r.navigation_noise.graph, end, std::max(first_gained, first_free)).poses;
+  }
+}
+
 // Registration in survey order, a batch of submaps at a time, as a vehicle would map: each
 // batch is predicted by dead reckoning from the trajectory corrected so far, its candidates are
 // registered from that prediction, and the graph is solved before the next batch. A pair's
@@ -215,6 +265,7 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
     const std::vector<Candidate> candidates = candidates_ending_in(submaps, estimate, begin, end, config.candidates, plan);
     ++r.batches;
     throw_if_cancelled(cancel);  // a batch taken up registers nothing, where the cancel is seen
+    const std::size_t batch_first = r.constraints.size();
     if (const RegisteredBatch* stored = taken_up(checkpoints, begin, end, candidates, estimate)) {
       r.constraints.insert(r.constraints.end(), stored->constraints.begin(), stored->constraints.end());
       ++r.batches_taken_up;
@@ -228,6 +279,13 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
     if (plan.consistency) {
       select_consistent_registrations(r.constraints, dr, dr_poses, config.robustness.pcm, &known_conflicts);
     }
+    const int survey_begin = survey_nodes(config.graph.survey_starts, survey_of(config.graph.survey_starts, begin), n).begin;
+    if (plan.alias_from_graph) {
+      const auto start = std::chrono::steady_clock::now();
+      judge_aliases_by_graph(r, batch_first, end, survey_begin, estimate, dr, alias_dr, dr_poses, config, plan,
+                             &known_conflicts);
+      r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
     const int first_changed = first_node_changed(r.constraints, solved_with);
     if (end < n && first_changed < end) {
       // The submaps registered so far: the later ones would hang off them by odometry alone and
@@ -239,7 +297,6 @@ Registrations register_incrementally(Registrations r, const SubmapSet& submaps, 
       // Of several surveys, the earlier ones are held too: the batch is mapped against them, and
       // a registration with an early submap of the first survey would otherwise re-solve every
       // survey each batch (20 `small` surveys: 358 of 628 s). The final solve moves them all.
-      const int survey_begin = survey_nodes(config.graph.survey_starts, survey_of(config.graph.survey_starts, begin), n).begin;
       const auto start = std::chrono::steady_clock::now();
       estimate = solve(estimate, r.constraints, r.navigation_noise.graph, end, std::max(first_changed, survey_begin)).poses;
       r.batch_solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -48,6 +48,7 @@ Plan plan_of(const PipelineConfig& c) {
   plan.direct_loops = plan.loop_closures && plan.quality_aware && c.direct_loops.enabled;
   plan.estimate_noise = plan.registration && c.navigation_noise.estimate;
   plan.alias_from_prior = plan.quality_aware && plan.dr_gate && c.robustness.alias_from_prior;
+  plan.alias_from_graph = plan.alias_from_prior && plan.batch_submaps > 0 && c.robustness.alias_from_graph;
   plan.own_gicp = uses_own_gicp(c.registration.gicp);
   plan.hessian_information = plan.quality_aware && c.quality.information_from_hessian;
   plan.threads = c.threads > 0 ? c.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

@@ -129,6 +129,17 @@ struct PipelineConfig {
     // feature-aided answer so too, or refused: quality.feature_aliases_as_direct). 0: issue 14's
     // uniqueness test.
     bool alias_from_prior = true;
+    // Where dead reckoning leaves an answer's competitors open, the graph of the registrations
+    // kept so far may not: each batch judges them again against where that graph puts the two
+    // submaps (its covariance, which only shrinks DR's), in up to `alias_graph_rounds` rounds, each
+    // solving the graph with what the last kept. On a lawnmower over sand waves the pairs near a
+    // turn are a short DR chain apart, and once they hold, the next pairs along the lines are too
+    // (docs/slam-every-seabed.md). Off: on `lake`-sized sand waves it took paper drift from 26.7 to
+    // 14.7 m, but under a heading walk it bent the survey to 34.6 m against dead reckoning's 21.2,
+    // a wrong verdict's error carried into the next predictions with the graph's covariance still
+    // tight. 0 (the default): dead reckoning alone judges.
+    bool alias_from_graph = false;
+    int alias_graph_rounds = 10;
     GraphCheckConfig line_check;
     double max_pull_sigma = 6.0;
     int max_drops = 20;
@@ -149,6 +160,8 @@ struct PipelineConfig {
       field("max_pull_sigma", max_pull_sigma, 0.1, 1e6);
       field("max_drops", max_drops, 0, 100000);
       field("alias_from_prior", alias_from_prior, 0, 1);
+      field("alias_from_graph", alias_from_graph, 0, 1);
+      field("alias_graph_rounds", alias_graph_rounds, 1, 1000);
       field("publish_rule", publish_rule, 0, 2);
     }
   } robustness;
@@ -210,6 +223,7 @@ struct Plan {
   bool direct_loops = false;      // loop closures without features by the direct path, within reach
   bool estimate_noise = false;    // the survey's own DR noise instead of Table 1's
   bool alias_from_prior = false;  // aliases dead reckoning rules out do not refuse an answer
+  bool alias_from_graph = false;  // ... nor those the graph kept so far rules out, batch by batch
   bool own_gicp = false;             // our GICP on prepared submaps, else PCL's on filtered clouds
   bool hessian_information = false;  // registrations' information shaped by the GICP cost's Hessian
   int threads = 0;             // resolved: at least 1

@@ -7,10 +7,10 @@ namespace bathyslam {
 namespace {
 
 // Raised whenever a field of Constraint (or of what it holds) is added, removed or reordered.
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
 // A tripwire for that: a field added to Constraint changes its size (GCC 12 and Clang 14 on
 // Debian 12 alike). Write and read the new field below, raise kVersion, then this size.
-static_assert(sizeof(Constraint) == 1392 && sizeof(Uniqueness) == 192 && sizeof(RegistrationQuality) == 32,
+static_assert(sizeof(Constraint) == 1696 && sizeof(Uniqueness) == 192 && sizeof(RegistrationQuality) == 32,
               "Constraint changed: keep registration_checkpoint.cpp's writer and reader in step");
 // The probe's square is (2 reach + 1)² offsets (uniqueness.h): far beyond any search radius over
 // step, and small enough that its side cannot overflow.
@@ -182,6 +182,8 @@ void put_constraint(Writer& w, const Constraint& c) {
   w.put(static_cast<int>(c.alias));
   w.put(c.alias_mahalanobis2);
   w.put_matrix(c.alias_spread_m);
+  w.put(static_cast<std::uint8_t>(c.graph_information.has_value()));
+  if (c.graph_information) w.put_matrix(*c.graph_information);
   put_rejection(w, c.rejection);
   put_rejection(w, c.exclusion);
 }
@@ -215,9 +217,10 @@ Constraint get_constraint(Reader& r) {
   c.dr_mahalanobis2 = r.get<double>();
   c.horizontal_doubt = r.get_string();
   r.get_matrix(c.horizontal_spread);
-  c.alias = r.get_enum(AliasResolution::kInformationRemoved);
+  c.alias = r.get_enum(AliasResolution::kJudgedByGraph);
   c.alias_mahalanobis2 = r.get<double>();
   r.get_matrix(c.alias_spread_m);
+  if (r.get<std::uint8_t>() != 0) r.get_matrix(c.graph_information.emplace());
   c.rejection = get_rejection(r);
   c.exclusion = get_rejection(r);
   return c;

@@ -45,9 +45,39 @@ double dr_horizontal_sigma(const DrNoiseModel& dr, int from, int to) {
   return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(horizontal).eigenvalues().maxCoeff()));
 }
 
+AliasGate dr_alias_gate(const Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses) {
+  // The DR gate's statistic for the answer moved by an offset: the difference from dead reckoning
+  // moves by the offset (in `from`'s level frame), its covariance stays.
+  const DrInnovation innovation = dr_innovation(graph_edge(c), dr, dr_poses);
+  const Vector6 difference = innovation.difference;
+  const Eigen::LDLT<Eigen::Matrix3d> gate(xy_yaw_block(dr.covariance(c.from, c.to) + innovation.measurement));
+  return [difference, gate](const Eigen::Vector2d& along) {
+    const Eigen::Vector3d d(difference(0) + along.x(), difference(1) + along.y(), difference(5));
+    return d.dot(gate.solve(d));
+  };
+}
+
+AliasGate graph_alias_gate(const Constraint& c, const std::vector<Eigen::Isometry3d>& estimate,
+                           const Eigen::Matrix2d& covariance) {
+  const Eigen::Isometry3d predicted = level_frame(estimate[c.from]).inverse() * level_frame(estimate[c.to]);
+  const Eigen::Vector2d difference =
+      pose_difference(between_level_frames(c.measured, estimate[c.from], estimate[c.to]), predicted).head<2>();
+  const double half_step = c.uniqueness.step_m / 2;
+  const Eigen::LDLT<Eigen::Matrix2d> gate(covariance + half_step * half_step * Eigen::Matrix2d::Identity());
+  return [difference, gate](const Eigen::Vector2d& along) {
+    const Eigen::Vector2d d = difference + along;
+    return d.dot(gate.solve(d));
+  };
+}
+
 void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
                    const AliasRule& rule) {
+  resolve_alias(c, dr_alias_gate(c, dr, dr_poses), min_distinctness, config, level_from_target, rule);
+}
+
+void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctness, const PlausibilityConfig& config,
+                   const Eigen::Matrix3d& level_from_target, const AliasRule& rule) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -68,18 +98,9 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   const std::vector<Eigen::Vector2d> competitors = u.competitor_offsets();
   if (competitors.empty()) return;
 
-  // The DR gate's statistic for the answer moved by each competitor's offset: the difference
-  // from dead reckoning moves by the offset (in `from`'s level frame), its covariance stays.
-  const DrInnovation innovation = dr_innovation(graph_edge(c), dr, dr_poses);
-  const Vector6& difference = innovation.difference;
-  const Eigen::LDLT<Eigen::Matrix3d> gate(xy_yaw_block(dr.covariance(c.from, c.to) + innovation.measurement));
   Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets
   int plausible = 0;
   double nearest = std::numeric_limits<double>::infinity();
-  const auto gate_at = [&](const Eigen::Vector2d& along) {
-    const Eigen::Vector3d d(difference(0) + along.x(), difference(1) + along.y(), difference(5));
-    return d.dot(gate.solve(d));
-  };
   for (const Eigen::Vector2d& offset : competitors) {
     const Eigen::Vector2d along = level_offset(level_from_target, offset);
     const double m2 = gate_at(along);
@@ -114,7 +135,12 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
     c.information = without_yaw(c.information);
     if (rule.depth_from_relief) c.information = with_depth_capped_by_relief(c.information, u);
   }
-  if (!rule.widens || !carries_horizontal_information(c.information) || u.distinctness() < rule.widen_min_distinctness) {
+  // Another basin fitting nearly as well leaves nothing horizontal, unless the prediction rules
+  // that basin out (rule.distinctness_among_plausible).
+  const bool contested = u.distinctness() < rule.widen_min_distinctness &&
+                         (!rule.distinctness_among_plausible ||
+                          gate_at(level_offset(level_from_target, u.alternative_offset_m)) <= config.chi2_threshold);
+  if (!rule.widens || !carries_horizontal_information(c.information) || contested) {
     c.information = without_horizontal(c.information);
     return;
   }
@@ -137,13 +163,18 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
   c.information = with_horizontal_spread(c.information, plausible_spread / plausible);
 }
 
+Eigen::Matrix3d level_from_target_of(const Constraint& c, const std::vector<Eigen::Isometry3d>& poses) {
+  return level_from_body(Eigen::Quaterniond(poses[c.from].rotation())).toRotationMatrix();
+}
+
 bool refused_by_prior(const Rejection& rejection, const Plan& plan) {
   return rejection.kind == RejectionKind::kImplausible ||
          (plan.alias_from_prior && rejection.kind == RejectionKind::kNotUnique);
 }
 
 void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel& aliases,
-                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan) {
+                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan,
+                      const AliasGate* graph_gate) {
   if (from_navigation(c.type)) return;
   // With the alias rule on, acceptance leaves the uniqueness test to resolve_alias: every
   // kNotUnique is the prior's, as every kImplausible is.
@@ -155,10 +186,35 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel&
   c.alias_spread_m.setZero();
   if (plan.quality_aware && plan.dr_gate) drop_position_if_turned(c, dr, dr_poses, config.quality.max_turn_chi2);
   if (plan.alias_from_prior) {
-    const Eigen::Matrix3d level_from_target =
-        level_from_body(Eigen::Quaterniond(dr_poses[c.from].rotation())).toRotationMatrix();
-    resolve_alias(c, aliases, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
-                  level_from_target, alias_rule(config.quality));
+    const Information6 unjudged = c.information;
+    const Eigen::Matrix3d level_from_target = level_from_target_of(c, dr_poses);
+    const AliasRule rule = alias_rule(config.quality);
+    resolve_alias(c, dr_alias_gate(c, aliases, dr_poses), config.acceptance.min_distinctness,
+                  config.robustness.pcm.plausibility, level_from_target, rule);
+    if (c.alias == AliasResolution::kInformationRemoved && c.accepted()) {
+      // Where dead reckoning leaves competitors open, the graph kept before the registration may
+      // not (robustness.alias_from_graph): its verdict, now or as given before, stands. An answer
+      // the graph itself does not allow (GICP slid along a crest from a good guess) gets none.
+      const double threshold = config.robustness.pcm.plausibility.chi2_threshold;
+      if (graph_gate && (*graph_gate)(Eigen::Vector2d::Zero()) <= threshold) {
+        const double dr_nearest = c.alias_mahalanobis2;
+        c.information = unjudged;
+        AliasRule among_plausible = rule;
+        among_plausible.distinctness_among_plausible = true;
+        resolve_alias(c, *graph_gate, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
+                      level_from_target, among_plausible);
+        // The graph picks the basin, not the place in it: no better than the probe's step (an
+        // answer GICP did not come back to from other starts was kept 1.0 m off at 6 sigma).
+        const double step = c.uniqueness.step_m;
+        c.information = with_horizontal_spread(c.information, step * step * Eigen::Matrix2d::Identity());
+        c.alias_mahalanobis2 = dr_nearest;
+        c.graph_information = c.accepted() ? std::optional<Information6>(c.information) : std::nullopt;
+      }
+      if (c.graph_information && c.accepted()) {
+        c.information = *c.graph_information;
+        c.alias = AliasResolution::kJudgedByGraph;
+      }
+    }
   }
   if (plan.dr_gate) gate_against_dead_reckoning(c, dr, dr_poses, config.robustness.pcm.plausibility);
 }

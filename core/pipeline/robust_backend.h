@@ -2,6 +2,7 @@
 // The back end's defences against wrong edges (issue 14): which registrations the graph may
 // believe (the safety net that checks the solution before it is published: safety_net.h).
 #include <limits>
+#include <functional>
 #include <vector>
 
 #include "core/graph/dr_noise.h"
@@ -35,7 +36,13 @@ struct AliasRule {
   double widen_min_distinctness = 0;    // ... unless another basin fits nearly as well
   bool feature_aided_as_direct = false;  // a feature-aided answer judged as a direct one, not refused
   bool depth_from_relief = false;       // ... its depth then capped as a direct answer's is
+  // The best other basin takes the horizontal information only if the gate allows it.
+  bool distinctness_among_plausible = false;
 };
+
+// The squared Mahalanobis distance of a registration's answer moved by `along` (m, in its
+// target's level frame) from a prediction of it.
+using AliasGate = std::function<double(const Eigen::Vector2d& along)>;
 AliasRule alias_rule(const QualityConfig& quality);
 
 // The uniqueness test with dead reckoning's word (robustness.alias_from_prior), for an accepted
@@ -54,6 +61,28 @@ void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eige
                    double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
                    const AliasRule& rule = {});
 
+// The same under any gate: `gate_at` judges each competitor in place of dead reckoning.
+void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctness, const PlausibilityConfig& config,
+                   const Eigen::Matrix3d& level_from_target, const AliasRule& rule = {});
+
+// Dead reckoning's gate for resolve_alias: the DR gate's statistic (x, y, yaw; DR's covariance
+// between the submaps and the registration's own) for the answer moved by an offset.
+AliasGate dr_alias_gate(const Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses);
+
+// The graph's gate (robustness.alias_from_graph): the answer against the graph's estimate of the
+// pair, x and y only, under `covariance` (the graph's, relative_covariances) and half the probe's
+// step for where the answer lies within its own basin. The registration's own information is left
+// out: it is shaped by the quality weight, not by the width of the answer's basin, and on sand
+// waves its sigmas of metres made every trough a crest away look plausible
+// (docs/slam-every-seabed.md).
+AliasGate graph_alias_gate(const Constraint& c, const std::vector<Eigen::Isometry3d>& estimate,
+                           const Eigen::Matrix2d& covariance);
+
+// The rotation from `c`'s target submap frame, where the probe's offsets lie, into its edge's
+// residual frame (the target's level frame), the target at `poses[c.from]`.
+Eigen::Matrix3d level_from_target_of(const Constraint& c, const std::vector<Eigen::Isometry3d>& poses);
+
+
 // Whether `rejection` rests on dead reckoning's noise model (the DR gate, or with
 // plan.alias_from_prior the uniqueness test), so that a better model may take it back.
 bool refused_by_prior(const Rejection& rejection, const Plan& plan);
@@ -64,8 +93,11 @@ bool refused_by_prior(const Rejection& rejection, const Plan& plan);
 // is tested again, so a registration judged under one noise model can be judged under a better
 // one. The survey's estimate gives two (navigation_noise.h): the loosest heading it does not
 // rule out for the gate, for the aliases the likeliest where the data determine it (alias_graph).
+// With `graph_gate`, where dead reckoning leaves competitors open the graph's gate judges them
+// again and its verdict is kept for every later judgement (robustness.alias_from_graph).
 void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel& aliases,
-                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan);
+                      const std::vector<Eigen::Isometry3d>& dr_poses, const PipelineConfig& config, const Plan& plan,
+                      const AliasGate* graph_gate = nullptr);
 
 // Pairwise consistency (PCM) over the accepted registrations that carry horizontal information
 // (the ones that can bend the survey); the rest of the accepted set is left out of the graph

@@ -672,5 +672,52 @@ TEST(AliasFromPrior, AliasesAreJudgedUnderTheirOwnModelNotTheGates) {
   EXPECT_EQ(c.alias, AliasResolution::kInformationRemoved);
 }
 
+// Where dead reckoning allows a sand-wave alias (Table 1's noise), the graph kept before may not
+// (robustness.alias_from_graph): with the pair placed to a metre, the aliases 10 m away are ruled
+// out and the answer keeps its information, as well as the probe's step (1 m) places it, also when
+// judged again under dead reckoning alone. An answer the graph itself does not allow (5 m from
+// where it puts the pair, its aliases 5 and 15 m from there) gets nothing from it.
+TEST(AliasFromGraph, AnAliasTheGraphRulesOutStaysRuledOutWhenDeadReckoningAloneWouldAllowIt) {
+  const Survey2Lines s = two_lines(20, 7);
+  PipelineConfig config;
+  config.robustness.alias_from_graph = true;
+  const Plan plan = plan_of(config);
+  ASSERT_TRUE(plan.alias_from_graph);
+  const DrNoiseModel table_1(s.result.dr_poses, GraphConfig{});
+  // The graph's estimate is the truth, its covariance of the pair a metre each way.
+  const Eigen::Matrix2d metre = Eigen::Matrix2d::Identity();
+
+  Constraint c = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
+  c.registered_information = c.information;
+  judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
+  ASSERT_EQ(c.alias, AliasResolution::kInformationRemoved) << "dead reckoning alone allows the aliases";
+  ASSERT_LT(c.information(0, 0), 0.01 * c.registered_information(0, 0)) << "nothing across the crests";
+
+  const AliasGate graph = graph_alias_gate(c, s.truth, metre);
+  judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan, &graph);
+  ASSERT_TRUE(c.accepted()) << c.rejection.text();
+  EXPECT_EQ(c.alias, AliasResolution::kJudgedByGraph);
+  // Every alias ruled out: its own 0.1 m sigmas, widened by the probe's 1 m step.
+  const double widened = 1 / (1 / c.registered_information(0, 0) + 1.0);
+  EXPECT_NEAR(c.information(0, 0), widened, 1e-6);
+  EXPECT_NEAR(c.information(1, 1), widened, 1e-6);
+  EXPECT_GT(c.information(2, 2), 50.0) << "depth as registered";
+  const Information6 judged = c.information;
+  judge_with_prior(c, table_1, table_1, s.result.dr_poses, config, plan);
+  EXPECT_EQ(c.alias, AliasResolution::kJudgedByGraph) << "the graph's verdict stands under a new DR model";
+  EXPECT_EQ(c.information, judged);
+
+  // GICP slid 5 m from where the graph puts the pair: the graph does not vouch for it, though it
+  // would rule out every alias of it.
+  Constraint slid = direct_registration(s, 15, 24, probed_with(sand_wave_aliases()));
+  slid.measured = pose(5, 0, 0) * slid.measured;
+  slid.registered_information = slid.information;
+  const AliasGate slid_graph = graph_alias_gate(slid, s.truth, metre);
+  judge_with_prior(slid, table_1, table_1, s.result.dr_poses, config, plan, &slid_graph);
+  EXPECT_EQ(slid.alias, AliasResolution::kInformationRemoved);
+  EXPECT_LT(slid.information(0, 0), 0.01 * slid.registered_information(0, 0));
+  EXPECT_FALSE(slid.graph_information.has_value());
+}
+
 }  // namespace
 }  // namespace bathyslam

@@ -713,5 +713,38 @@ TEST(RobustGraph, KeptPairTestsSelectAsComputingEveryPair) {
   EXPECT_THROW(select_consistent_loops(twice, dr, {}, &shuffled), std::invalid_argument);
 }
 
+// The graph's covariance of a pair (relative_covariances) with odometry alone is dead reckoning's,
+// in its parametrisation (x, y, yaw in `from`'s level frame), both ways along the chain and across
+// the turn; a registration between the two passes shrinks it for the pairs beside it.
+TEST(DrNoise, TheGraphsCovarianceOfAPairIsDeadReckoningsUntilARegistrationTiesIt) {
+  const std::vector<Eigen::Isometry3d> dr = out_and_back(15);
+  GraphConfig config;
+  config.dr_sigma_translation_m = {0.3, 0.3, 0.1};
+  config.dr_sigma_rotation_rad = {1e-4, 1e-4, 3e-3};
+  const DrNoiseModel model(dr, config);
+  std::vector<PoseGraphEdge> edges;
+  for (int k = 0; k + 1 < static_cast<int>(dr.size()); ++k) {
+    edges.push_back({k, k + 1, dr[k].inverse() * dr[k + 1], odometry_information(config, k)});
+  }
+  const std::vector<std::pair<int, int>> pairs{{0, 12}, {3, 25}, {25, 3}, {29, 14}, {7, 8}};
+  const auto graph = relative_covariances(dr, edges, config, pairs);
+  ASSERT_TRUE(graph.has_value());
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const Eigen::Matrix3d expected = xy_yaw_block(model.covariance(pairs[k].first, pairs[k].second));
+    EXPECT_TRUE((*graph)[k].isApprox(expected, 1e-4)) << pairs[k].first << "->" << pairs[k].second << "\n"
+                                                      << (*graph)[k] << "\n" << expected;
+  }
+
+  // Nodes 4 and 25 face each other across the turn (out_and_back); tie them to a centimetre.
+  edges.push_back({4, 25, dr[4].inverse() * dr[25], information_from_sigmas({0.01, 0.01, 0.01}, {1e-3, 1e-3, 1e-3})});
+  edges.back().robust = true;
+  const auto tied = relative_covariances(dr, edges, config, {{5, 24}});
+  ASSERT_TRUE(tied.has_value());
+  const double dr_sigma = std::sqrt(xy_yaw_block(model.covariance(5, 24)).topLeftCorner<2, 2>().trace());
+  const double graph_sigma = std::sqrt((*tied)[0].topLeftCorner<2, 2>().trace());
+  EXPECT_LT(graph_sigma, 0.3 * dr_sigma) << "a step of odometry each side of the tie, not the whole turn";
+  EXPECT_GT(graph_sigma, 0.3) << "but those two steps' noise stays";
+}
+
 }  // namespace
 }  // namespace bathyslam
