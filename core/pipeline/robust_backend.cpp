@@ -70,14 +70,13 @@ AliasGate graph_alias_gate(const Constraint& c, const std::vector<Eigen::Isometr
   };
 }
 
-void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
-                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
-                   const AliasRule& rule) {
-  resolve_alias(c, dr_alias_gate(c, dr, dr_poses), min_distinctness, config, level_from_target, rule);
-}
+namespace {
 
-void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctness, const PlausibilityConfig& config,
-                   const Eigen::Matrix3d& level_from_target, const AliasRule& rule) {
+// resolve_alias, the gate made only once there are competitors to judge: most answers have none,
+// and dead reckoning's gate costs the measurement's covariance (an eigen-decomposition) each time
+// every registration is judged again.
+void resolve_alias_gated(Constraint& c, const std::function<AliasGate()>& make_gate, double min_distinctness,
+                         const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target, const AliasRule& rule) {
   if (!c.accepted()) return;
   const bool feature_aided = c.path == RegistrationPath::kFeatureAided;
   const Uniqueness& u = c.uniqueness;
@@ -98,6 +97,7 @@ void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctn
   const std::vector<Eigen::Vector2d> competitors = u.competitor_offsets();
   if (competitors.empty()) return;
 
+  const AliasGate gate_at = make_gate();
   Eigen::Matrix2d plausible_spread = Eigen::Matrix2d::Zero();  // of the plausible offsets
   int plausible = 0;
   double nearest = std::numeric_limits<double>::infinity();
@@ -163,6 +163,19 @@ void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctn
   c.information = with_horizontal_spread(c.information, plausible_spread / plausible);
 }
 
+}  // namespace
+
+void resolve_alias(Constraint& c, const DrNoiseModel& dr, const std::vector<Eigen::Isometry3d>& dr_poses,
+                   double min_distinctness, const PlausibilityConfig& config, const Eigen::Matrix3d& level_from_target,
+                   const AliasRule& rule) {
+  resolve_alias_gated(c, [&] { return dr_alias_gate(c, dr, dr_poses); }, min_distinctness, config, level_from_target, rule);
+}
+
+void resolve_alias(Constraint& c, const AliasGate& gate_at, double min_distinctness, const PlausibilityConfig& config,
+                   const Eigen::Matrix3d& level_from_target, const AliasRule& rule) {
+  resolve_alias_gated(c, [&] { return gate_at; }, min_distinctness, config, level_from_target, rule);
+}
+
 Eigen::Matrix3d level_from_target_of(const Constraint& c, const std::vector<Eigen::Isometry3d>& poses) {
   return level_from_body(Eigen::Quaterniond(poses[c.from].rotation())).toRotationMatrix();
 }
@@ -189,8 +202,8 @@ void judge_with_prior(Constraint& c, const DrNoiseModel& dr, const DrNoiseModel&
     const Information6 unjudged = c.information;
     const Eigen::Matrix3d level_from_target = level_from_target_of(c, dr_poses);
     const AliasRule rule = alias_rule(config.quality);
-    resolve_alias(c, dr_alias_gate(c, aliases, dr_poses), config.acceptance.min_distinctness,
-                  config.robustness.pcm.plausibility, level_from_target, rule);
+    resolve_alias(c, aliases, dr_poses, config.acceptance.min_distinctness, config.robustness.pcm.plausibility,
+                  level_from_target, rule);
     if (c.alias == AliasResolution::kInformationRemoved && c.accepted()) {
       // Where dead reckoning leaves competitors open, the graph kept before the registration may
       // not (robustness.alias_from_graph): its verdict, now or as given before, stands. An answer

@@ -1,8 +1,8 @@
 #pragma once
 // The back end's defences against wrong edges (issue 14): which registrations the graph may
 // believe (the safety net that checks the solution before it is published: safety_net.h).
-#include <limits>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "core/graph/dr_noise.h"
@@ -39,11 +39,11 @@ struct AliasRule {
   // The best other basin takes the horizontal information only if the gate allows it.
   bool distinctness_among_plausible = false;
 };
+AliasRule alias_rule(const QualityConfig& quality);
 
 // The squared Mahalanobis distance of a registration's answer moved by `along` (m, in its
 // target's level frame) from a prediction of it.
 using AliasGate = std::function<double(const Eigen::Vector2d& along)>;
-AliasRule alias_rule(const QualityConfig& quality);
 
 // The uniqueness test with dead reckoning's word (robustness.alias_from_prior), for an accepted
 // registration with its information. A feature-aided answer at least `min_distinctness` distinct
@@ -81,7 +81,6 @@ AliasGate graph_alias_gate(const Constraint& c, const std::vector<Eigen::Isometr
 // The rotation from `c`'s target submap frame, where the probe's offsets lie, into its edge's
 // residual frame (the target's level frame), the target at `poses[c.from]`.
 Eigen::Matrix3d level_from_target_of(const Constraint& c, const std::vector<Eigen::Isometry3d>& poses);
-
 
 // Whether `rejection` rests on dead reckoning's noise model (the DR gate, or with
 // plan.alias_from_prior the uniqueness test), so that a better model may take it back.
